@@ -1,0 +1,47 @@
+# isokit — the commands a newcomer types (README). Each target installs missing Debian
+# packages, configures and builds (Release, all cores), then runs.
+BUILD      ?= build
+ASAN_BUILD ?= build-asan
+DEMO_OUT   ?= demo-out
+JOBS       ?= $(shell nproc)
+CMAKE_ARGS ?=
+
+.PHONY: all deps configure build demo test test-release test-asan bench clean
+
+all: build
+
+deps:
+	@scripts/install-deps.sh
+
+configure: deps
+	cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release $(CMAKE_ARGS)
+
+build: configure
+	cmake --build $(BUILD) -j $(JOBS)
+
+demo: build
+	$(BUILD)/apps/skinning/isokit-demo --out $(DEMO_OUT)
+
+# All tests of the Release build (unit, slow, gpu — skipped without a device — and the
+# find_package consumer), then the unit tests again under ASan + UBSan.
+test: test-release test-asan
+
+test-release: build
+	ctest --test-dir $(BUILD) --output-on-failure -j $(JOBS)
+
+test-asan: deps
+	cmake -S . -B $(ASAN_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DISOKIT_SANITIZE=ON \
+	  -DISOKIT_CUDA=OFF -DISOKIT_APPS=OFF -DISOKIT_BENCH=OFF $(CMAKE_ARGS)
+	cmake --build $(ASAN_BUILD) -j $(JOBS)
+	ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 \
+	  ctest --test-dir $(ASAN_BUILD) --output-on-failure -j $(JOBS) -L unit
+
+# Benchmarks: 5 repetitions each, JSON in $(BUILD)/bench-results, ratio tables on stdout.
+bench: build
+	@mkdir -p $(BUILD)/bench-results
+	$(BUILD)/bench/bench_fields --benchmark_repetitions=5 \
+	  --benchmark_out=$(BUILD)/bench-results/fields.json --benchmark_out_format=json
+	$(BUILD)/bench/isokit-bench-report $(BUILD)/bench-results/fields.json --baseline BM_CapsuleEval
+
+clean:
+	rm -rf $(BUILD) $(ASAN_BUILD) $(DEMO_OUT)

@@ -1,0 +1,224 @@
+// SPDX-License-Identifier: MIT
+#include "isokit/plot/figure.h"
+
+#include <cairo-pdf.h>
+#include <cairo-svg.h>
+#include <cairo.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <stdexcept>
+#include <utility>
+
+#include "isokit/core/error.h"
+
+namespace isokit::plot {
+namespace {
+
+Point2 lerp_edge(const Point2& a, const Point2& b, float va, float vb, float level) {
+  const double t = (va == vb) ? 0.5 : double(level - va) / double(vb - va);
+  return {a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])};
+}
+
+std::string extension_of(const std::string& path) {
+  const auto dot = path.find_last_of('.');
+  if (dot == std::string::npos) return "";
+  std::string ext = path.substr(dot + 1);
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  return ext;
+}
+
+}  // namespace
+
+std::vector<Segment2> iso_segments(const ScalarGrid& g, float level) {
+  std::vector<Segment2> out;
+  for (int j = 0; j + 1 < g.ny; ++j) {
+    for (int i = 0; i + 1 < g.nx; ++i) {
+      // Corners counter-clockwise: (i,j) (i+1,j) (i+1,j+1) (i,j+1).
+      const Point2 p[4] = {
+          {g.x(i), g.y(j)}, {g.x(i + 1), g.y(j)}, {g.x(i + 1), g.y(j + 1)}, {g.x(i), g.y(j + 1)}};
+      const float v[4] = {g.at(i, j), g.at(i + 1, j), g.at(i + 1, j + 1), g.at(i, j + 1)};
+      int mask = 0;
+      for (int c = 0; c < 4; ++c) mask |= (v[c] >= level ? 1 : 0) << c;
+      if (mask == 0 || mask == 15) continue;
+      // Crossing point on each edge e = (c, c+1) whose ends straddle the level.
+      Point2 cross[4];
+      bool has[4];
+      for (int e = 0; e < 4; ++e) {
+        const int a = e, b = (e + 1) % 4;
+        has[e] = ((mask >> a) & 1) != ((mask >> b) & 1);
+        if (has[e]) cross[e] = lerp_edge(p[a], p[b], v[a], v[b], level);
+      }
+      if (mask == 5 || mask == 10) {  // saddle: decide by the centre value
+        const bool centre_in = (v[0] + v[1] + v[2] + v[3]) / 4.f >= level;
+        const bool corner0_in = (mask & 1) != 0;
+        if (centre_in == corner0_in) {  // corners 0 and 2 connected through the centre
+          out.push_back({cross[0], cross[1]});
+          out.push_back({cross[2], cross[3]});
+        } else {
+          out.push_back({cross[3], cross[0]});
+          out.push_back({cross[1], cross[2]});
+        }
+        continue;
+      }
+      Point2 ends[2];
+      int k = 0;
+      for (int e = 0; e < 4 && k < 2; ++e)
+        if (has[e]) ends[k++] = cross[e];
+      out.push_back({ends[0], ends[1]});
+    }
+  }
+  return out;
+}
+
+double total_length(const std::vector<Segment2>& segments) {
+  double len = 0;
+  for (const auto& s : segments) len += std::hypot(s[1][0] - s[0][0], s[1][1] - s[0][1]);
+  return len;
+}
+
+Rgb colormap(double t) {
+  // isokit's own sequential map: control colours chosen for monotone lightness.
+  static const Rgb stops[] = {{0.08, 0.06, 0.28}, {0.16, 0.26, 0.55}, {0.10, 0.50, 0.58},
+                              {0.28, 0.70, 0.45}, {0.75, 0.85, 0.25}, {0.99, 0.93, 0.55}};
+  constexpr int n = sizeof(stops) / sizeof(stops[0]);
+  t = std::clamp(std::isfinite(t) ? t : 0.0, 0.0, 1.0) * (n - 1);
+  const int i = std::min(int(t), n - 2);
+  const double f = t - i;
+  return {stops[i][0] + f * (stops[i + 1][0] - stops[i][0]),
+          stops[i][1] + f * (stops[i + 1][1] - stops[i][1]),
+          stops[i][2] + f * (stops[i + 1][2] - stops[i][2])};
+}
+
+Figure::Figure(ScalarGrid grid, FigureOptions options)
+    : grid_(std::move(grid)), options_(std::move(options)) {
+  require(grid_.nx >= 2 && grid_.ny >= 2, "Figure grid", "needs at least 2x2 samples",
+          "sample the function on a larger grid");
+  require(grid_.values.size() == static_cast<std::size_t>(grid_.nx) * grid_.ny, "Figure grid",
+          "has " + std::to_string(grid_.values.size()) + " values for " + std::to_string(grid_.nx) + "x" +
+              std::to_string(grid_.ny) + " samples",
+          "fill nx * ny values");
+  require(grid_.x1 > grid_.x0 && grid_.y1 > grid_.y0, "Figure grid", "has an empty extent",
+          "pass x1 > x0 and y1 > y0");
+  require(options_.pixel_size >= 16 && options_.pixel_size <= 8192, "Figure pixel_size",
+          "must be in [16, 8192] (got " + std::to_string(options_.pixel_size) + ")",
+          "pass a sensible image width");
+  require(options_.value_max > options_.value_min, "Figure value range", "is empty",
+          "pass value_max > value_min");
+}
+
+void Figure::add_iso_lines(float level, const Rgb& color, double width_px, bool dashed) {
+  strokes_.push_back({iso_segments(grid_, level), color, width_px, dashed});
+}
+
+void Figure::add_polyline(const std::vector<Point2>& points, const Rgb& color, double width_px, bool dashed) {
+  Stroke s{{}, color, width_px, dashed};
+  for (std::size_t i = 1; i < points.size(); ++i) s.segments.push_back({points[i - 1], points[i]});
+  strokes_.push_back(std::move(s));
+}
+
+void Figure::add_segments(const std::vector<Segment2>& segments, const Rgb& color, double width_px) {
+  strokes_.push_back({segments, color, width_px, false});
+}
+
+void Figure::add_label(const Point2& at, const std::string& text, const Rgb& color) {
+  labels_.push_back({at, text, color});
+}
+
+void Figure::add_caption(const std::string& line) {
+  caption_.push_back(line);
+}
+
+void Figure::save(const std::string& path) const {
+  const std::string ext = extension_of(path);
+  require(ext == "png" || ext == "svg" || ext == "pdf", "figure file '" + path + "'",
+          "has an unknown extension '" + ext + "'", "use .png, .svg or .pdf");
+  const double margin = 16, line_h = 16;
+  const double plot_w = options_.pixel_size;
+  const double plot_h = plot_w * (grid_.y1 - grid_.y0) / (grid_.x1 - grid_.x0);
+  const double title_h = options_.title.empty() ? 0 : 24;
+  const double width = plot_w + 2 * margin;
+  const double height = plot_h + 2 * margin + title_h + line_h * double(caption_.size());
+  const std::string tmp = path + ".tmp";
+
+  using SurfacePtr = std::unique_ptr<cairo_surface_t, decltype(&cairo_surface_destroy)>;
+  SurfacePtr surface(ext == "png"   ? cairo_image_surface_create(CAIRO_FORMAT_RGB24, int(width), int(height))
+                     : ext == "svg" ? cairo_svg_surface_create(tmp.c_str(), width, height)
+                                    : cairo_pdf_surface_create(tmp.c_str(), width, height),
+                     &cairo_surface_destroy);
+  std::unique_ptr<cairo_t, decltype(&cairo_destroy)> cr(cairo_create(surface.get()), &cairo_destroy);
+  cairo_t* c = cr.get();
+  cairo_set_source_rgb(c, 1, 1, 1);
+  cairo_paint(c);
+
+  // Heat map: one rectangle per sample cell, coloured by the cell-centre average.
+  const double ox = margin, oy = margin + title_h;
+  auto to_px = [&](const Point2& p) -> Point2 {
+    return {ox + (p[0] - grid_.x0) / (grid_.x1 - grid_.x0) * plot_w,
+            oy + plot_h - (p[1] - grid_.y0) / (grid_.y1 - grid_.y0) * plot_h};
+  };
+  const double cw = plot_w / (grid_.nx - 1), ch = plot_h / (grid_.ny - 1);
+  for (int j = 0; j + 1 < grid_.ny; ++j)
+    for (int i = 0; i + 1 < grid_.nx; ++i) {
+      const double v =
+          0.25 * (double(grid_.at(i, j)) + grid_.at(i + 1, j) + grid_.at(i, j + 1) + grid_.at(i + 1, j + 1));
+      const Rgb col = colormap((v - options_.value_min) / (options_.value_max - options_.value_min));
+      cairo_set_source_rgb(c, col[0], col[1], col[2]);
+      const Point2 p = to_px({grid_.x(i), grid_.y(j + 1)});
+      cairo_rectangle(c, p[0], p[1], cw + 0.5, ch + 0.5);
+      cairo_fill(c);
+    }
+  for (const Stroke& s : strokes_) {
+    cairo_set_source_rgb(c, s.color[0], s.color[1], s.color[2]);
+    cairo_set_line_width(c, s.width);
+    cairo_set_line_cap(c, CAIRO_LINE_CAP_ROUND);
+    const double dash[] = {6.0, 4.0};
+    cairo_set_dash(c, dash, s.dashed ? 2 : 0, 0);
+    for (const auto& seg : s.segments) {
+      const Point2 a = to_px(seg[0]), b = to_px(seg[1]);
+      cairo_move_to(c, a[0], a[1]);
+      cairo_line_to(c, b[0], b[1]);
+    }
+    cairo_stroke(c);
+  }
+  cairo_set_dash(c, nullptr, 0, 0);
+  cairo_select_font_face(c, "sans-serif", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_NORMAL);
+  cairo_set_font_size(c, 13);
+  for (const Label& l : labels_) {
+    const Point2 p = to_px(l.at);
+    cairo_set_source_rgb(c, l.color[0], l.color[1], l.color[2]);
+    cairo_move_to(c, p[0], p[1]);
+    cairo_show_text(c, l.text.c_str());
+  }
+  cairo_set_source_rgb(c, 0, 0, 0);
+  if (!options_.title.empty()) {
+    cairo_set_font_size(c, 15);
+    cairo_move_to(c, margin, margin + 14);
+    cairo_show_text(c, options_.title.c_str());
+  }
+  cairo_set_font_size(c, 12);
+  for (std::size_t k = 0; k < caption_.size(); ++k) {
+    cairo_move_to(c, margin, oy + plot_h + margin + line_h * double(k) + 4);
+    cairo_show_text(c, caption_[k].c_str());
+  }
+  cr.reset();
+  cairo_status_t status = CAIRO_STATUS_SUCCESS;
+  if (ext == "png") {
+    status = cairo_surface_write_to_png(surface.get(), tmp.c_str());
+  } else {
+    cairo_surface_finish(surface.get());
+    status = cairo_surface_status(surface.get());
+  }
+  surface.reset();
+  if (status != CAIRO_STATUS_SUCCESS || std::rename(tmp.c_str(), path.c_str()) != 0) {
+    std::remove(tmp.c_str());
+    throw std::runtime_error(
+        "cannot write figure '" + path +
+        "': " + (status != CAIRO_STATUS_SUCCESS ? cairo_status_to_string(status) : "rename failed") +
+        "; check that the folder exists and is writable");
+  }
+}
+
+}  // namespace isokit::plot

@@ -1,0 +1,31 @@
+# SPDX-License-Identifier: MIT
+# ISOKIT_CUDA = AUTO | ON | OFF. AUTO enables the CUDA language when nvcc is found (PATH or
+# /usr/local/cuda); a GPU is not needed to build. Sets ISOKIT_CUDA_ENABLED.
+set(ISOKIT_CUDA_ENABLED OFF)
+string(TOUPPER "${ISOKIT_CUDA}" _isokit_cuda)
+if(NOT _isokit_cuda STREQUAL "OFF")
+  if(NOT CMAKE_CUDA_COMPILER AND NOT DEFINED ENV{CUDACXX})
+    find_program(_isokit_nvcc nvcc HINTS /usr/local/cuda/bin)
+    if(_isokit_nvcc)
+      set(CMAKE_CUDA_COMPILER "${_isokit_nvcc}" CACHE FILEPATH "CUDA compiler")
+    endif()
+  endif()
+  include(CheckLanguage)
+  check_language(CUDA)
+  if(CMAKE_CUDA_COMPILER)
+    if(NOT DEFINED CMAKE_CUDA_ARCHITECTURES)
+      # Hopper (H100/H200) by default; pass -DCMAKE_CUDA_ARCHITECTURES=native for the local GPU.
+      set(CMAKE_CUDA_ARCHITECTURES 90)
+    endif()
+    enable_language(CUDA)
+    set(CMAKE_CUDA_STANDARD 17)
+    set(CMAKE_CUDA_STANDARD_REQUIRED ON)
+    find_package(CUDAToolkit REQUIRED)
+    set(ISOKIT_CUDA_ENABLED ON)
+  elseif(_isokit_cuda STREQUAL "ON")
+    message(FATAL_ERROR "ISOKIT_CUDA=ON but no CUDA compiler (nvcc) was found; install the CUDA "
+                        "Toolkit or configure with -DISOKIT_CUDA=AUTO/OFF")
+  else()
+    message(STATUS "isokit: nvcc not found, CUDA backend disabled")
+  endif()
+endif()
