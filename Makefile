@@ -42,6 +42,9 @@ bench: build
 	$(BUILD)/bench/bench_fields --benchmark_repetitions=5 \
 	  --benchmark_out=$(BUILD)/bench-results/fields.json --benchmark_out_format=json
 	$(BUILD)/bench/isokit-bench-report $(BUILD)/bench-results/fields.json --baseline BM_CapsuleEval
+	$(BUILD)/bench/bench_operators --benchmark_repetitions=5 \
+	  --benchmark_out=$(BUILD)/bench-results/operators.json --benchmark_out_format=json
+	$(BUILD)/bench/isokit-bench-report $(BUILD)/bench-results/operators.json --baseline BM_Slice/0/0/0/128
 
 clean:
 	rm -rf $(BUILD) $(ASAN_BUILD) $(DEMO_OUT)

@@ -1,0 +1,90 @@
+// SPDX-License-Identifier: MIT
+/// \file
+/// Operator specs (2014 §4.2): the profile curves along which `g = 0.5`, their control points
+/// keyframed over `d`, the grid resolution and the controller. Stored as versioned JSON
+/// (format "isokit-operator-spec", version 1; see docs/operators.md for the schema).
+#pragma once
+
+#include <array>
+#include <string>
+#include <vector>
+
+#include "isokit/operators/controller.h"
+
+namespace isokit::operators {
+
+/// A point of the operator domain `(f1, f2) ∈ [0, 1]²`.
+using Point2 = std::array<double, 2>;
+
+/// What `g = 0.5` on the curve separates. Numbers are fixed (file format); strings in JSON.
+enum class CurveKind : int {
+  /// "boundary": the outer 0.5 iso-line; `g < 0.5` on the side of (0, 0), `> 0.5` toward (1, 1).
+  kBoundary = 0,
+  /// "contact": a contact line (2014 Fig. 5, green); `g > 0.5` on both sides.
+  kContact = 1,
+};
+
+/// How control points define the curve: "polyline" (through the points) or "bspline" (clamped
+/// uniform cubic B-spline: passes through the first and last points; ≥ 4 points).
+enum class CurveType : int { kPolyline = 0, kBSpline = 1 };
+
+/// Control points of a curve at one value of `d`.
+struct Keyframe {
+  double d{0};
+  std::vector<Point2> points;
+};
+
+/// A profile curve: control points linearly interpolated between keyframes (constant beyond the
+/// first and last). All keyframes have the same number of points.
+struct ProfileCurve {
+  CurveKind kind{CurveKind::kBoundary};
+  CurveType type{CurveType::kPolyline};
+  std::vector<Keyframe> keyframes;
+
+  std::vector<Point2> control_points(double d) const;
+  /// The curve at `d` as a polyline (B-splines sampled with 32 points per span).
+  std::vector<Point2> polyline(double d) const;
+};
+
+struct OperatorSpec {
+  std::string name{"custom"};
+  int resolution{128};  ///< nodes per f axis (2014 §6.1: 128), in [8, 1024]
+  int slices{128};      ///< number of d slices (2014 §6.1: 128), in [8, 1024]
+  /// Slope of the constraint values across the profile: nodes of crossed cells get
+  /// `0.5 + distance_slope * signed distance` (2014 §4.2; slope 1 matches `g(f, 0) = f`).
+  double distance_slope{1.0};
+  /// Controller: a preset name (Controller::preset) unless `controller_knots` is non-empty.
+  std::string controller{"contact"};
+  std::vector<ControllerKnot> controller_knots;
+  std::vector<ProfileCurve> curves;
+
+  Controller make_controller() const;
+  bool operator==(const OperatorSpec& o) const;
+};
+
+bool operator==(const ProfileCurve& a, const ProfileCurve& b);
+
+/// Presets (2014 §4.2):
+/// - "contact" (`g_dc`): boundary polyline (0, .5)-(.5, .5)-(.5, 0) for all d, and the contact
+///   line from (.5, .5) along the diagonal to (.5 + 0.4 d, .5 + 0.4 d) (see docs: the paper's
+///   end point (.5 + d/√2, .5 + d/√2) leaves the square for d > 0.707).
+/// - "bulge" (`g_db`): boundary B-spline inflating toward the origin with d (meeting point on
+///   the diagonal from (.5, .5) at d = 0 to (.36, .36) at d = 1) plus the contact line from the
+///   meeting point to (.5 + 0.4 d, .5 + 0.4 d).
+/// - "clean-union": the boundary polyline only, the same for all d.
+/// \throw isokit::InputError for an unknown name or resolution.
+OperatorSpec preset_spec(const std::string& name, int resolution = 128);
+std::vector<std::string> preset_spec_names();
+
+/// Checks every field; `source` (a file name) prefixes the messages.
+/// \throw isokit::InputError naming the source and the field.
+void validate(const OperatorSpec& spec, const std::string& source);
+
+/// JSON text <-> spec (validated). \throw isokit::InputError naming `source` and the field.
+OperatorSpec spec_from_json(const std::string& text, const std::string& source);
+std::string spec_to_json(const OperatorSpec& spec);
+/// Files; save writes to a temporary name and renames.
+OperatorSpec load_spec(const std::string& path);
+void save_spec(const OperatorSpec& spec, const std::string& path);
+
+}  // namespace isokit::operators
