@@ -45,6 +45,12 @@ bench: build
 	$(BUILD)/bench/bench_operators --benchmark_repetitions=5 \
 	  --benchmark_out=$(BUILD)/bench-results/operators.json --benchmark_out_format=json
 	$(BUILD)/bench/isokit-bench-report $(BUILD)/bench-results/operators.json --baseline BM_Slice/0/0/0/128
+	$(BUILD)/bench/bench_track --benchmark_repetitions=5 \
+	  --benchmark_out=$(BUILD)/bench-results/track.json --benchmark_out_format=json
+	$(BUILD)/bench/isokit-bench-report $(BUILD)/bench-results/track.json --baseline BM_TrackIterations/0/0/real_time
+	$(BUILD)/bench/bench_implicit --benchmark_repetitions=5 \
+	  --benchmark_out=$(BUILD)/bench-results/implicit.json --benchmark_out_format=json
+	$(BUILD)/bench/isokit-bench-report $(BUILD)/bench-results/implicit.json --baseline BM_TreeEval/0/real_time
 
 clean:
 	rm -rf $(BUILD) $(ASAN_BUILD) $(DEMO_OUT)

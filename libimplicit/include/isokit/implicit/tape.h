@@ -1,0 +1,77 @@
+// SPDX-License-Identifier: MIT
+/// \file
+/// A composition tree compiled into a flat tape (libfive's tree/deck split): instructions in
+/// post-order, read by a small value-stack machine. Leaves are evaluated through their field;
+/// inner nodes through `compose_node` (node_eval.h). Records are plain data (the layout GPU
+/// kernels will read).
+///
+/// Pruning: every instruction carries its world support box (a node's box is the union of its
+/// children's). At the first instruction of a subtree, if the point lies outside, the evaluator
+/// pushes 0 and jumps past the largest subtree starting there whose box excludes the point (its
+/// ancestors along first-child links, `chain_parent`). Pruning changes no result: pruned
+/// subtrees are exactly 0 with a 0 gradient.
+///
+/// \note Field convention: values in [0, 1], inside > 0.5, gradients inward, compact support.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "isokit/implicit/field.h"
+#include "isokit/implicit/node_eval.h"
+#include "isokit/implicit/tree.h"
+
+namespace isokit::implicit {
+
+/// One tape instruction (post-order).
+struct TapeInstr {
+  std::int32_t leaf{-1};          ///< index into the leaf records, or -1 for an inner node
+  OpKind kind{OpKind::Max};       ///< inner nodes
+  std::int32_t op{-1};            ///< index into the controller / grid-operator arrays
+  std::int32_t chain_parent{-1};  ///< parent, if this instruction is its first child; else -1
+  Box3f box{};                    ///< world support box
+};
+
+/// A leaf: which field, where. Grid leaves carry their plain `GridView` and are evaluated
+/// inline (`grid.nodes != nullptr`); other fields go through `Field::eval`.
+struct TapeLeaf {
+  Rigid3f local_to_world{};
+  std::int32_t field{-1};
+  std::int32_t id{-1};
+  GridView grid{};
+};
+
+class Tape final : public Field {
+ public:
+  /// \throw InputError if the tree is deeper than 4096.
+  explicit Tape(const CompositionTree& tree);
+
+  FieldSample eval(const Vec3f& p) const override { return eval(p, nullptr, true); }
+  /// With `diag` (size() entries, indexed by instruction; leaves get their value only) and
+  /// optional pruning (off: every instruction is evaluated; same result).
+  FieldSample eval(const Vec3f& p, NodeDiagnostics* diag, bool prune) const;
+  Box3f support() const override;
+
+  /// Moves one leaf (by its position among the leaves, post-order) or every leaf tagged `id`;
+  /// the boxes are updated, nothing is rebuilt. Not to be called while other threads evaluate.
+  /// \throw InputError for an out-of-range leaf or a non-rigid transform.
+  void set_leaf_transform(std::size_t leaf, const Rigid3f& local_to_world);
+  void set_transform_of(int id, const Rigid3f& local_to_world);
+
+  std::size_t size() const { return instr_.size(); }
+  const std::vector<TapeInstr>& instructions() const { return instr_; }
+  const std::vector<TapeLeaf>& leaves() const { return leaves_; }
+  int max_stack() const { return max_stack_; }
+
+ private:
+  void update_boxes();
+  std::vector<TapeInstr> instr_;
+  std::vector<TapeLeaf> leaves_;
+  std::vector<FieldPtr> fields_;
+  std::vector<operators::ControllerTable> controllers_;
+  std::vector<operators::GridOperatorView> grids_;
+  std::vector<std::shared_ptr<const operators::GridOperator>> grid_owners_;
+  int max_stack_{0};
+};
+
+}  // namespace isokit::implicit

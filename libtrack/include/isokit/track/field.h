@@ -1,0 +1,59 @@
+// SPDX-License-Identifier: MIT
+/// \file
+/// The field the tracker follows: any callable that evaluates value and gradient for a batch of
+/// points (libtrack knows nothing about skeletons, HRBFs or libimplicit), plus the statistics
+/// every tracking call returns.
+///
+/// \note Field convention: values in [0, 1], surface 0.5, inside > 0.5, gradients point inward,
+/// compact support (0 value and 0 gradient outside). Triangles are counter-clockwise seen from
+/// outside, so a correct triangle's normal points along `-∇f`.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+#include "isokit/core/math.h"
+#include "isokit/track/mesh.h"
+
+namespace isokit::track {
+
+/// Evaluates `n` points: writes `values[k]`, `gradients[k]`, and may set `contact[k] = 1` when
+/// the point lies on a contact part of the field (`contact` arrives zero-filled; leave it alone
+/// if the field knows nothing about contacts). Called concurrently from several threads on
+/// disjoint ranges when the tracker's grain is > 0: it must be thread-safe.
+using FieldFunction = std::function<void(const Vec3f* points, std::size_t n, float* values, Vec3f* gradients,
+                                         std::uint8_t* contact)>;
+
+/// `iso[v] = f(positions[v])` (per-vertex target iso-values sampled at rest, 2013 §5).
+/// \throw InputError if a position is not finite or the field returns a non-finite value.
+std::vector<float> sample_iso_values(const FieldFunction& field, const Positions& positions);
+
+/// What a tracking or projection call did.
+struct TrackStats {
+  int iterations{0};          ///< relaxation iterations (2014: Jacobi + Newton; 2013: Newton steps)
+  bool converged{false};      ///< largest move fell under the tolerance before the iteration cap
+  float max_move{0};          ///< largest vertex move in the last iteration
+  float max_residual{0};      ///< max |f(v) - iso_v| over vertices outside the smoothed contact region
+  float mean_residual{0};     ///< mean of the same
+  int contact_vertices{0};    ///< vertices flagged by the field or stopped by the gradient-angle rule
+  int smoothed_vertices{0};   ///< vertices with diffused beta > 0 (moved by contact smoothing)
+  int lost_vertices{0};       ///< zero / non-finite gradient: left in place (e.g. outside the support)
+  int inverted_triangles{0};  ///< triangles whose normal points along +∇f at their centroid
+  double seconds{0};          ///< wall time of the call
+};
+
+/// Per-vertex outputs of the last call (same order as the mesh vertices).
+struct VertexFlags {
+  std::vector<std::uint8_t> contact;  ///< 1 = contact vertex
+  std::vector<std::uint8_t> lost;     ///< 1 = no usable gradient, left in place
+  std::vector<float> beta;            ///< diffused smoothing weight in [0, 1]
+};
+
+/// Counts triangles whose normal `(b - a) x (c - a)` points along `+∇f` at the centroid
+/// (`dot > 0`); triangles where the field has a zero gradient are not counted.
+int count_inverted_triangles(const FieldFunction& field, const Positions& positions,
+                             const Triangles& triangles);
+
+}  // namespace isokit::track

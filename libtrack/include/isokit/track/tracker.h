@@ -1,0 +1,91 @@
+// SPDX-License-Identifier: MIT
+/// \file
+/// The 2014 iso-surface tracker (Robust Iso-Surface Tracking, §5) over a triangle mesh.
+///
+/// Pipeline of one `track()` call, starting from the caller's initial positions (2014 stage 1:
+/// the previous result moved by the bones' rigid deltas):
+/// 1. up to `initial_newton_steps` Newton projections `p <- p + σ (iso - f(p)) ∇f / |∇f|²`
+///    (step length clamped, see Options);
+/// 2. iterations of one Jacobi step of the ARAP energy
+///    `E = Σi Σj wij ||(p̂i - p̂j) - Ri (pi - pj)||²` (cotangent weights at rest, prescribed Ri)
+///    restricted to the tangent plane of the last evaluated gradient, scaled by the vertex's
+///    relaxation mask, followed by one Newton projection — until the largest move is below
+///    `tolerance` or `max_iterations`;
+/// 3. localised Laplacian smoothing with diffused β at contact vertices (2013 §5, eq. 7).
+/// Contacts: flagged by the field, or (rule on) the gradient turned by more than
+/// `contact_angle` between two consecutive evaluations. Every such turn halves the vertex's
+/// Newton and tangential steps for the rest of the call (floor 1/64), and a vertex flagged by the
+/// angle rule takes unrestricted (3D) Jacobi steps: on a contact valley the gradient direction
+/// says nothing about the surface (a deviation from 2013, which stops the vertex).
+/// All updates are double-buffered (Jacobi); results do not depend on `grain`.
+/// See docs/tracking.md for the equations and every deviation from the papers.
+#pragma once
+
+#include <vector>
+
+#include "isokit/track/field.h"
+#include "isokit/track/mesh.h"
+
+namespace isokit::track {
+
+/// β-diffused Laplacian smoothing at contacts (2013 §5 eq. 7; "a few steps", no values given).
+struct SmoothingOptions {
+  int beta_diffusion_steps{2};  ///< β <- mean of β over the closed one-ring, repeated
+  int smoothing_steps{3};       ///< v <- (1 - β) v + β centroid(one-ring), repeated
+};
+
+struct TrackerOptions {
+  float sigma{1.0f};             ///< Newton step scale (2014 uses plain Newton iterations: 1)
+  int initial_newton_steps{10};  ///< stage-2 projection steps before the relaxation
+  int max_iterations{100};       ///< Jacobi + Newton iterations (2014 Table 1: 10..600)
+  /// Stop when the largest move of an iteration is below `tolerance * rest bbox diagonal`.
+  float tolerance{1e-5f};
+  /// A Newton step is at most `max_step * (mean rest length of the vertex's edges)` long.
+  float max_step{0.5f};
+  /// Cotangents are clamped to [0, max_cotangent] per triangle corner (see docs).
+  float max_cotangent{10.0f};
+  float min_gradient{1e-6f};       ///< |∇f| below this: vertex lost, left in place
+  bool angle_contacts{true};       ///< detect contacts by the 2013 gradient-angle rule
+  float contact_angle_deg{55.0f};  ///< 2013 §5
+  SmoothingOptions smoothing{};
+  std::size_t grain{1024};  ///< parallel_for grain (0 = serial)
+};
+
+/// Stateful tracker: precomputes weights and adjacency, then tracks many times.
+class IsoSurfaceTracker {
+ public:
+  /// \param rest `#V by 3` rest positions; \param triangles `#F by 3`;
+  /// \param iso `#V` target iso-values (e.g. `sample_iso_values` at rest).
+  /// \throw InputError naming the item for mismatched sizes, non-finite values, bad indices,
+  /// or invalid options.
+  IsoSurfaceTracker(const Positions& rest, const Triangles& triangles, std::vector<float> iso,
+                    TrackerOptions options = {});
+
+  /// Per-vertex relaxation mask in [0, 1] (0 = no tangential move; default all 1).
+  /// \throw InputError for a wrong size or a value outside [0, 1].
+  void set_relaxation_mask(std::vector<float> mask);
+
+  /// Tracks the field from `positions` (in: initial guess, out: result).
+  /// \param rotations `#V` target rotations Ri, or empty for identity.
+  /// \throw InputError for wrong sizes or non-finite positions / rotations.
+  TrackStats track(const FieldFunction& field, const std::vector<Mat3f>& rotations, Positions& positions);
+
+  const VertexFlags& flags() const { return flags_; }
+  const Adjacency& adjacency() const { return adj_; }
+  /// Cotangent weights aligned with `adjacency().neighbors` (symmetric, ≥ 0).
+  const std::vector<float>& weights() const { return weights_; }
+  const TrackerOptions& options() const { return options_; }
+
+ private:
+  Positions rest_;
+  Triangles triangles_;
+  std::vector<Vec3f> rest_pts_;
+  std::vector<float> iso_;
+  TrackerOptions options_;
+  Adjacency adj_;
+  std::vector<float> weights_, weight_sum_, max_step_, mask_;
+  float diagonal_{0};
+  VertexFlags flags_;
+};
+
+}  // namespace isokit::track

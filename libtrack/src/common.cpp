@@ -1,0 +1,219 @@
+// SPDX-License-Identifier: MIT
+#include <algorithm>
+#include <cmath>
+
+#include "detail.h"
+#include "isokit/core/parallel.h"
+
+namespace isokit::track {
+
+namespace detail {
+
+std::vector<Vec3f> to_points(const Positions& p, const std::string& what) {
+  std::vector<Vec3f> out(static_cast<std::size_t>(p.rows()));
+  for (Eigen::Index i = 0; i < p.rows(); ++i) {
+    out[static_cast<std::size_t>(i)] = row(p, i);
+    require(finite(out[static_cast<std::size_t>(i)]), what + " vertex " + std::to_string(i), "is not finite",
+            "pass finite coordinates");
+  }
+  return out;
+}
+
+void from_points(const std::vector<Vec3f>& pts, Positions& p) {
+  p.resize(static_cast<Eigen::Index>(pts.size()), 3);
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    const auto r = static_cast<Eigen::Index>(i);
+    p(r, 0) = pts[i].x, p(r, 1) = pts[i].y, p(r, 2) = pts[i].z;
+  }
+}
+
+std::vector<float> mean_edge_lengths(const std::vector<Vec3f>& rest, const Adjacency& adj) {
+  const int n = static_cast<int>(rest.size());
+  std::vector<float> out(rest.size(), 0.f);
+  double total = 0;
+  long count = 0;
+  for (int i = 0; i < n; ++i) {
+    double s = 0;
+    for (int k = adj.offsets[i]; k < adj.offsets[i + 1]; ++k) s += norm(rest[adj.neighbors[k]] - rest[i]);
+    if (adj.degree(i) > 0) out[i] = static_cast<float>(s / adj.degree(i));
+    total += s;
+    count += adj.degree(i);
+  }
+  const float global = count > 0 ? static_cast<float>(total / count) : 1.f;
+  for (int i = 0; i < n; ++i)
+    if (!(out[i] > 0.f)) out[i] = global > 0.f ? global : 1.f;
+  return out;
+}
+
+float bbox_diagonal(const std::vector<Vec3f>& pts) {
+  Box3f b;
+  for (const Vec3f& p : pts) b.extend(p);
+  return b.empty() ? 0.f : norm(b.size());
+}
+
+int find_neighbor(const Adjacency& adj, int i, int j) {
+  const auto b = adj.neighbors.begin() + adj.offsets[i], e = adj.neighbors.begin() + adj.offsets[i + 1];
+  const auto it = std::lower_bound(b, e, j);
+  return (it != e && *it == j) ? static_cast<int>(it - adj.neighbors.begin()) : -1;
+}
+
+void cotangent_weights(const std::vector<Vec3f>& rest, const Triangles& triangles, const Adjacency& adj,
+                       float max_cot, std::vector<float>& weights, std::vector<float>& sums) {
+  weights.assign(adj.neighbors.size(), 0.f);
+  for (Eigen::Index f = 0; f < triangles.rows(); ++f) {
+    for (int k = 0; k < 3; ++k) {
+      // Corner c opposite the edge (a, b).
+      const int c = triangles(f, k), a = triangles(f, (k + 1) % 3), b = triangles(f, (k + 2) % 3);
+      const Vec3f u = rest[a] - rest[c], v = rest[b] - rest[c];
+      const float cr = norm(cross(u, v));
+      float cot = 0.f;  // degenerate (zero-area) triangles contribute nothing
+      if (cr > 1e-12f * (squared_norm(u) + squared_norm(v))) cot = dot(u, v) / cr;
+      cot = std::clamp(cot, 0.f, max_cot);
+      weights[find_neighbor(adj, a, b)] += 0.5f * cot;
+      weights[find_neighbor(adj, b, a)] += 0.5f * cot;
+    }
+  }
+  const int n = static_cast<int>(rest.size());
+  sums.assign(rest.size(), 0.f);
+  for (int i = 0; i < n; ++i) {
+    float s = 0.f;
+    for (int k = adj.offsets[i]; k < adj.offsets[i + 1]; ++k) s += weights[k];
+    if (!(s > 0.f) && adj.degree(i) > 0) {  // all incident triangles degenerate: uniform
+      for (int k = adj.offsets[i]; k < adj.offsets[i + 1]; ++k) weights[k] = 1.f;
+      s = static_cast<float>(adj.degree(i));
+    }
+    sums[i] = s;
+  }
+}
+
+int contact_smoothing(const Adjacency& adj, const std::vector<std::uint8_t>& contact,
+                      const SmoothingOptions& options, std::size_t grain, std::vector<Vec3f>& pts,
+                      std::vector<float>& beta) {
+  const std::size_t n = pts.size();
+  beta.assign(n, 0.f);
+  for (std::size_t i = 0; i < n; ++i) beta[i] = contact[i] ? 1.f : 0.f;
+  std::vector<float> next(n);
+  for (int s = 0; s < options.beta_diffusion_steps; ++s) {
+    parallel_for(n, grain, [&](std::size_t b, std::size_t e) {
+      for (std::size_t i = b; i < e; ++i) {
+        float acc = beta[i];
+        for (int k = adj.offsets[i]; k < adj.offsets[i + 1]; ++k) acc += beta[adj.neighbors[k]];
+        next[i] = acc / static_cast<float>(1 + adj.degree(static_cast<int>(i)));
+      }
+    });
+    beta.swap(next);
+  }
+  // Contact vertices keep β = 1 (2013: "β = 1 for vertices stopped at a gradient discontinuity").
+  for (std::size_t i = 0; i < n; ++i)
+    if (contact[i]) beta[i] = 1.f;
+  std::vector<Vec3f> buf(n);
+  for (int s = 0; s < options.smoothing_steps; ++s) {
+    parallel_for(n, grain, [&](std::size_t b, std::size_t e) {
+      for (std::size_t i = b; i < e; ++i) {
+        const int deg = adj.degree(static_cast<int>(i));
+        if (beta[i] <= 0.f || deg == 0) {
+          buf[i] = pts[i];
+          continue;
+        }
+        Vec3f c{};
+        for (int k = adj.offsets[i]; k < adj.offsets[i + 1]; ++k) c += pts[adj.neighbors[k]];
+        c = c / static_cast<float>(deg);
+        buf[i] = pts[i] * (1.f - beta[i]) + c * beta[i];
+      }
+    });
+    pts.swap(buf);
+  }
+  int count = 0;
+  for (std::size_t i = 0; i < n; ++i) count += beta[i] > 0.f ? 1 : 0;
+  return count;
+}
+
+void eval_field(const FieldFunction& field, const Vec3f* pts, std::size_t n, float* values, Vec3f* grads,
+                std::uint8_t* contact, std::size_t grain) {
+  parallel_for(n, grain, [&](std::size_t b, std::size_t e) {
+    std::fill(contact + b, contact + e, std::uint8_t{0});
+    field(pts + b, e - b, values + b, grads + b, contact + b);
+  });
+}
+
+void final_stats(const FieldFunction& field, const std::vector<Vec3f>& pts, const Triangles& triangles,
+                 const std::vector<float>& iso, std::size_t grain, VertexFlags& flags, TrackStats& stats) {
+  const std::size_t n = pts.size();
+  std::vector<float> values(n);
+  std::vector<Vec3f> grads(n);
+  std::vector<std::uint8_t> fc(n);
+  eval_field(field, pts.data(), n, values.data(), grads.data(), fc.data(), grain);
+  double sum = 0;
+  long count = 0;
+  float mx = 0.f;
+  stats.contact_vertices = 0;
+  stats.lost_vertices = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (fc[i]) flags.contact[i] = 1;
+    stats.contact_vertices += flags.contact[i];
+    stats.lost_vertices += flags.lost[i];
+    if (flags.contact[i] || flags.lost[i] || flags.beta[i] > 0.f || !std::isfinite(values[i])) continue;
+    const float r = std::abs(values[i] - iso[i]);
+    mx = std::max(mx, r);
+    sum += r;
+    ++count;
+  }
+  stats.max_residual = mx;
+  stats.mean_residual = count > 0 ? static_cast<float>(sum / count) : 0.f;
+  stats.inverted_triangles = 0;
+  // Inverted triangles at the centroids.
+  const std::size_t nf = static_cast<std::size_t>(triangles.rows());
+  std::vector<Vec3f> cen(nf), cg(nf);
+  std::vector<float> cv(nf);
+  std::vector<std::uint8_t> cc(nf);
+  for (std::size_t f = 0; f < nf; ++f) {
+    const auto r = static_cast<Eigen::Index>(f);
+    cen[f] = (pts[triangles(r, 0)] + pts[triangles(r, 1)] + pts[triangles(r, 2)]) / 3.f;
+  }
+  eval_field(field, cen.data(), nf, cv.data(), cg.data(), cc.data(), grain);
+  for (std::size_t f = 0; f < nf; ++f) {
+    const auto r = static_cast<Eigen::Index>(f);
+    const Vec3f a = pts[triangles(r, 0)], b = pts[triangles(r, 1)], c = pts[triangles(r, 2)];
+    if (dot(cross(b - a, c - a), cg[f]) > 0.f) ++stats.inverted_triangles;
+  }
+}
+
+void validate_mesh(const Positions& rest, const Triangles& triangles, std::size_t iso_size) {
+  require(rest.rows() > 0, "rest positions", "are empty", "pass a mesh with vertices");
+  require(
+      iso_size == static_cast<std::size_t>(rest.rows()), "iso values",
+      "size " + std::to_string(iso_size) + " differs from the vertex count " + std::to_string(rest.rows()),
+      "pass one iso-value per vertex");
+  (void)triangles;
+}
+
+}  // namespace detail
+
+std::vector<float> sample_iso_values(const FieldFunction& field, const Positions& positions) {
+  const std::vector<Vec3f> pts = detail::to_points(positions, "positions");
+  const std::size_t n = pts.size();
+  std::vector<float> values(n);
+  std::vector<Vec3f> grads(n);
+  std::vector<std::uint8_t> contact(n);
+  detail::eval_field(field, pts.data(), n, values.data(), grads.data(), contact.data(), 0);
+  for (std::size_t i = 0; i < n; ++i)
+    require(std::isfinite(values[i]), "field value at vertex " + std::to_string(i), "is not finite",
+            "check the field");
+  return values;
+}
+
+int count_inverted_triangles(const FieldFunction& field, const Positions& positions,
+                             const Triangles& triangles) {
+  const std::vector<Vec3f> pts = detail::to_points(positions, "positions");
+  vertex_adjacency(triangles, static_cast<int>(pts.size()));  // validates indices
+  VertexFlags flags;
+  flags.contact.assign(pts.size(), 0);
+  flags.lost.assign(pts.size(), 0);
+  flags.beta.assign(pts.size(), 0.f);
+  TrackStats stats;
+  std::vector<float> iso(pts.size(), 0.5f);
+  detail::final_stats(field, pts, triangles, iso, 0, flags, stats);
+  return stats.inverted_triangles;
+}
+
+}  // namespace isokit::track

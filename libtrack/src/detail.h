@@ -1,0 +1,59 @@
+// SPDX-License-Identifier: MIT
+// Internal helpers shared by the 2014 tracker and the 2013 projector (not installed).
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "isokit/core/error.h"
+#include "isokit/core/math.h"
+#include "isokit/track/field.h"
+#include "isokit/track/mesh.h"
+#include "isokit/track/tracker.h"
+
+namespace isokit::track::detail {
+
+inline bool finite(const Vec3f& v) {
+  return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+}
+
+inline Vec3f row(const Positions& p, Eigen::Index i) {
+  return {p(i, 0), p(i, 1), p(i, 2)};
+}
+
+/// Copies rows into a flat vector (throws InputError naming `what` and the vertex on NaN/inf).
+std::vector<Vec3f> to_points(const Positions& p, const std::string& what);
+void from_points(const std::vector<Vec3f>& pts, Positions& p);
+
+/// Mean rest length of each vertex's edges (global mean for isolated vertices).
+std::vector<float> mean_edge_lengths(const std::vector<Vec3f>& rest, const Adjacency& adj);
+float bbox_diagonal(const std::vector<Vec3f>& pts);
+
+/// Index of neighbour `j` in the row of `i` (CSR), or -1.
+int find_neighbor(const Adjacency& adj, int i, int j);
+
+/// Cotangent weights aligned with adj.neighbors, clamped per corner to [0, max_cot]; a vertex
+/// whose weights sum to 0 gets uniform weights 1. Also returns the per-vertex sums.
+void cotangent_weights(const std::vector<Vec3f>& rest, const Triangles& triangles, const Adjacency& adj,
+                       float max_cot, std::vector<float>& weights, std::vector<float>& sums);
+
+/// Diffuses β from the contact flags and applies the Laplacian smoothing (double-buffered).
+/// Returns the number of vertices with β > 0.
+int contact_smoothing(const Adjacency& adj, const std::vector<std::uint8_t>& contact,
+                      const SmoothingOptions& options, std::size_t grain, std::vector<Vec3f>& pts,
+                      std::vector<float>& beta);
+
+/// Final statistics: residuals over vertices with β == 0 and a usable field value, contact
+/// flags from the field (OR-ed into `contact`), inverted triangles.
+void final_stats(const FieldFunction& field, const std::vector<Vec3f>& pts, const Triangles& triangles,
+                 const std::vector<float>& iso, std::size_t grain, VertexFlags& flags, TrackStats& stats);
+
+/// Calls the field over [0, n) in parallel chunks (each chunk one call).
+void eval_field(const FieldFunction& field, const Vec3f* pts, std::size_t n, float* values, Vec3f* grads,
+                std::uint8_t* contact, std::size_t grain);
+
+void validate_mesh(const Positions& rest, const Triangles& triangles, std::size_t iso_size);
+
+}  // namespace isokit::track::detail

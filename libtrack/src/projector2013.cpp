@@ -1,0 +1,199 @@
+// SPDX-License-Identifier: MIT
+#include "isokit/track/projector2013.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <numeric>
+
+#include "detail.h"
+#include "isokit/core/parallel.h"
+
+namespace isokit::track {
+
+namespace {
+
+// Mean value coordinates (Floater 2003; Hormann & Floater 2006) of the origin with respect to
+// the polygon of the one-ring projected onto the plane ⊥ n, ordered by angle. Returns false
+// (no relaxation for this vertex) when the origin is not strictly inside a valid star: a
+// boundary vertex (an angular gap ≥ π), or a degenerate (zero-length / collinear) neighbour.
+bool mean_value_coordinates(const std::vector<Vec3f>& d, const Vec3f& n, std::vector<float>& phi) {
+  const std::size_t m = d.size();
+  phi.assign(m, 0.f);
+  if (m < 3) return false;
+  Vec3f u = std::abs(n.x) < 0.9f ? cross(n, Vec3f{1, 0, 0}) : cross(n, Vec3f{0, 1, 0});
+  u = u / norm(u);
+  const Vec3f v = cross(n, u);
+  std::vector<double> x(m), y(m), ang(m);
+  std::vector<std::size_t> order(m);
+  for (std::size_t k = 0; k < m; ++k) {
+    x[k] = dot(d[k], u), y[k] = dot(d[k], v);
+    if (!(x[k] * x[k] + y[k] * y[k] > 1e-20)) return false;
+    ang[k] = std::atan2(y[k], x[k]);
+  }
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return ang[a] < ang[b]; });
+  std::vector<double> tan_half(m);
+  for (std::size_t k = 0; k < m; ++k) {
+    const std::size_t a = order[k], b = order[(k + 1) % m];
+    const double c = x[a] * y[b] - y[a] * x[b];  // sin of the angle * ra * rb
+    const double dd = x[a] * x[b] + y[a] * y[b];
+    const double ra = std::hypot(x[a], y[a]), rb = std::hypot(x[b], y[b]);
+    if (!(c > 1e-12 * ra * rb)) return false;  // gap ≥ π or collinear: not inside
+    tan_half[k] = (ra * rb - dd) / c;          // tan(α/2) = (1 - cos α) / sin α
+  }
+  double total = 0;
+  std::vector<double> w(m);
+  for (std::size_t k = 0; k < m; ++k) {
+    const std::size_t a = order[k];
+    w[k] = (tan_half[(k + m - 1) % m] + tan_half[k]) / std::hypot(x[a], y[a]);
+    total += w[k];
+  }
+  if (!(total > 0)) return false;
+  for (std::size_t k = 0; k < m; ++k) phi[order[k]] = static_cast<float>(w[k] / total);
+  return true;
+}
+
+}  // namespace
+
+Projector2013::Projector2013(const Positions& rest, const Triangles& triangles,
+                             const FieldFunction& rest_field, ProjectorOptions options)
+    : rest_(rest), triangles_(triangles), options_(options) {
+  require(std::isfinite(options_.sigma) && options_.sigma > 0.f && options_.sigma <= 1.f,
+          "ProjectorOptions::sigma", "must be in (0, 1]", "use 0.35 (2013)");
+  require(options_.max_iterations >= 0, "ProjectorOptions::max_iterations", "must be >= 0", "use e.g. 50");
+  require(options_.mu <= 1.f && std::isfinite(options_.mu), "ProjectorOptions::mu", "must be <= 1 and finite",
+          "use a negative value for the paper's μ or a constant in [0, 1]");
+  require(options_.contact_angle_deg > 0.f && options_.contact_angle_deg <= 180.f,
+          "ProjectorOptions::contact_angle_deg", "must be in (0, 180]", "use 55 (2013)");
+  require(static_cast<bool>(rest_field), "rest field", "is empty", "pass a field function");
+  require(rest_.rows() > 0, "rest positions", "are empty", "pass a mesh with vertices");
+  const std::vector<Vec3f> pts = detail::to_points(rest_, "rest positions");
+  const std::size_t n = pts.size();
+  adj_ = vertex_adjacency(triangles_, static_cast<int>(n));
+  iso_.resize(n);
+  rest_normals_.resize(n);
+  std::vector<std::uint8_t> fc(n);
+  detail::eval_field(rest_field, pts.data(), n, iso_.data(), rest_normals_.data(), fc.data(), 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    require(std::isfinite(iso_[i]) && detail::finite(rest_normals_[i]),
+            "rest field at vertex " + std::to_string(i), "is not finite", "check the field");
+    const float g = norm(rest_normals_[i]);
+    rest_normals_[i] = g > options_.min_gradient ? rest_normals_[i] / g : Vec3f{};
+  }
+  phi_.assign(adj_.neighbors.size(), 0.f);
+  std::vector<Vec3f> d;
+  std::vector<float> phi;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (rest_normals_[i] == Vec3f{}) continue;
+    d.clear();
+    for (int k = adj_.offsets[i]; k < adj_.offsets[i + 1]; ++k) d.push_back(pts[adj_.neighbors[k]] - pts[i]);
+    if (mean_value_coordinates(d, rest_normals_[i], phi))
+      std::copy(phi.begin(), phi.end(), phi_.begin() + adj_.offsets[i]);
+  }
+  max_step_ = detail::mean_edge_lengths(pts, adj_);
+  for (float& s : max_step_) s *= options_.max_step;
+}
+
+void Projector2013::relax(const std::vector<Vec3f>& normals, float mu, Positions& positions) const {
+  const std::vector<Vec3f> cur = detail::to_points(positions, "positions");
+  require(cur.size() == iso_.size() && normals.size() == iso_.size(), "relax inputs",
+          "sizes differ from the mesh", "pass one position and normal per vertex");
+  std::vector<Vec3f> out(cur.size());
+  for (std::size_t i = 0; i < cur.size(); ++i) {
+    Vec3f delta{};
+    for (int k = adj_.offsets[i]; k < adj_.offsets[i + 1]; ++k) {
+      const Vec3f e = cur[adj_.neighbors[k]] - cur[i];
+      delta += (e - normals[i] * dot(e, normals[i])) * phi_[k];  // qij - vi
+    }
+    out[i] = cur[i] + delta * mu;
+  }
+  detail::from_points(out, positions);
+}
+
+TrackStats Projector2013::project(const FieldFunction& field, Positions& positions) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const std::size_t n = iso_.size();
+  require(
+      static_cast<std::size_t>(positions.rows()) == n, "initial positions",
+      "have " + std::to_string(positions.rows()) + " rows, the mesh has " + std::to_string(n) + " vertices",
+      "pass one position per vertex");
+  require(static_cast<bool>(field), "field", "is empty", "pass a field function");
+  std::vector<Vec3f> cur = detail::to_points(positions, "initial positions");
+  std::vector<Vec3f> next(n), grads(n), normal(n, Vec3f{});
+  std::vector<float> values(n), resid(n, 0.f);
+  std::vector<std::uint8_t> fc(n), done(n, 0);
+  flags_.contact.assign(n, 0);
+  flags_.lost.assign(n, 0);
+  const float cos_contact = std::cos(options_.contact_angle_deg * 3.14159265358979f / 180.f);
+  const float min_g2 = options_.min_gradient * options_.min_gradient;
+  const std::size_t grain = options_.grain;
+
+  TrackStats stats;
+  for (int it = 0; it < options_.max_iterations; ++it) {
+    // Newton step (2013 eq. 4, sign so that f moves toward iso with inward gradients).
+    parallel_for(n, grain, [&](std::size_t b, std::size_t e) {
+      detail::eval_field(field, cur.data() + b, e - b, values.data() + b, grads.data() + b, fc.data() + b, 0);
+      for (std::size_t i = b; i < e; ++i) {
+        next[i] = cur[i];
+        if (flags_.contact[i] || flags_.lost[i]) continue;
+        const Vec3f g = grads[i];
+        const float g2 = squared_norm(g);
+        if (!std::isfinite(values[i]) || !detail::finite(g) || !(g2 > min_g2)) {
+          flags_.lost[i] = 1;
+          continue;
+        }
+        const Vec3f nrm = g / std::sqrt(g2);
+        if (normal[i] != Vec3f{} && dot(nrm, normal[i]) < cos_contact) {
+          flags_.contact[i] = 1;  // stopped at a gradient discontinuity
+          continue;
+        }
+        normal[i] = nrm;
+        resid[i] = std::abs(iso_[i] - values[i]);
+        done[i] = resid[i] <= options_.tolerance;
+        Vec3f step = g * (options_.sigma * (iso_[i] - values[i]) / g2);
+        const float len = norm(step);
+        if (len > max_step_[i]) step = step * (max_step_[i] / len);
+        next[i] = cur[i] + step;
+      }
+    });
+    cur.swap(next);
+    stats.iterations = it + 1;
+    bool all = true;
+    for (std::size_t i = 0; i < n; ++i) all = all && (done[i] || flags_.contact[i] || flags_.lost[i]);
+    if (all) {
+      stats.converged = true;
+      break;
+    }
+    if (it % 2 == 1) {
+      // MVC tangential relaxation after every pair of Newton steps (2013 eq. 5, 6).
+      parallel_for(n, grain, [&](std::size_t b, std::size_t e) {
+        for (std::size_t i = b; i < e; ++i) {
+          next[i] = cur[i];
+          if (flags_.contact[i] || flags_.lost[i] || normal[i] == Vec3f{}) continue;
+          float mu = options_.mu;
+          if (mu < 0.f) {
+            const float r = resid[i] - 1.f;
+            mu = std::max(0.f, 1.f - r * r * r * r);
+          }
+          Vec3f delta{};
+          for (int k = adj_.offsets[i]; k < adj_.offsets[i + 1]; ++k) {
+            const Vec3f ed = cur[adj_.neighbors[k]] - cur[i];
+            delta += (ed - normal[i] * dot(ed, normal[i])) * phi_[k];
+          }
+          next[i] = cur[i] + delta * mu;
+        }
+      });
+      cur.swap(next);
+    }
+  }
+  if (options_.max_iterations == 0) stats.converged = true;
+  stats.smoothed_vertices =
+      detail::contact_smoothing(adj_, flags_.contact, options_.smoothing, grain, cur, flags_.beta);
+  detail::final_stats(field, cur, triangles_, iso_, grain, flags_, stats);
+  detail::from_points(cur, positions);
+  stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return stats;
+}
+
+}  // namespace isokit::track

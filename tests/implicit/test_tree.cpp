@@ -1,0 +1,339 @@
+// SPDX-License-Identifier: MIT
+// Composition tree and tape: tape = recursive evaluation, pruning changes nothing, gradients
+// against finite differences (constant-d operators), rigid leaf updates, diagnostics, batch
+// agreement, and the 2013 / 2014 builders.
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <set>
+
+#include "isokit/core/error.h"
+#include "isokit/implicit/grid_field.h"
+#include "isokit/implicit/primitives.h"
+#include "isokit/implicit/skeleton.h"
+#include "isokit/implicit/tape.h"
+#include "isokit/operators/analytic.h"
+#include "test_util.h"
+
+using namespace isokit;
+using namespace isokit::implicit;
+namespace ops = isokit::operators;
+
+namespace {
+
+/// A grid operator sampled from the 2013 gradient blend (5 slices in d, 33 nodes per axis).
+std::shared_ptr<const ops::GridOperator> sampled_blend_grid() {
+  const int nd = 5, nf = 33;
+  std::vector<float> data(std::size_t(nd * nf * nf));
+  for (int k = 0; k < nd; ++k)
+    for (int i = 0; i < nf; ++i)
+      for (int j = 0; j < nf; ++j)
+        data[std::size_t((k * nf + i) * nf + j)] =
+            ops::gradient_blend_2013(float(i) / (nf - 1), float(j) / (nf - 1), float(k) / (nd - 1)).g;
+  return std::make_shared<const ops::GridOperator>(nd, nf, std::move(data));
+}
+
+Rigid3f random_rigid(test::Rng& rng, double spread) {
+  const Mat3T<double> R = rng.rotation();
+  Rigid3f x;
+  for (int i = 0; i < 9; ++i) x.R.m[i] = float(R.m[i]);
+  x.t = test::to_float(rng.vec(-spread, spread));
+  return x;
+}
+
+NodeOperator random_op(test::Rng& rng, bool constant_d) {
+  const auto ctrl = ops::Controller::preset(constant_d ? "constant1" : "blend2013");
+  switch (rng.integer(0, 4)) {
+    case 0:
+      return NodeOperator::max();
+    case 1:
+      return NodeOperator::sum_blend();
+    case 2:
+      return NodeOperator::clean_union();
+    case 3:
+      return NodeOperator::gradient_blend(ctrl);
+    default:
+      return NodeOperator::grid_operator(sampled_blend_grid(), ctrl, "blend-grid");
+  }
+}
+
+/// A random tree of `n` capsules spread over a few units (random shape of the tree); with
+/// `grid_leaves`, every fourth capsule is sampled into a 12³ grid (inline grid leaves of the tape).
+CompositionTree random_tree(test::Rng& rng, int n, bool constant_d, bool grid_leaves = true) {
+  std::vector<CompositionTree> items;
+  for (int i = 0; i < n; ++i) {
+    const float len = float(rng.uniform(0.3, 1.2)), rad = float(rng.uniform(0.15, 0.4));
+    FieldPtr cap = std::make_shared<const CapsuleField>(Vec3f{0, 0, 0}, Vec3f{0, 0, len}, rad);
+    if (grid_leaves && i % 4 == 3)
+      cap = std::make_shared<const GridField>(*cap, Box3f{}, GridFieldOptions{12, 0});  // grid leaf
+    items.push_back(CompositionTree::leaf(cap, random_rigid(rng, 1.5), i));
+  }
+  while (items.size() > 1) {
+    const std::size_t a = std::size_t(rng.integer(0, int(items.size()) - 1));
+    CompositionTree ta = items[a];
+    items.erase(items.begin() + long(a));
+    const std::size_t b = std::size_t(rng.integer(0, int(items.size()) - 1));
+    CompositionTree tb = items[b];
+    items.erase(items.begin() + long(b));
+    items.push_back(CompositionTree::node(random_op(rng, constant_d), ta, tb));
+  }
+  return items[0];
+}
+
+}  // namespace
+
+TEST_CASE("tape evaluation equals recursive evaluation; pruning changes no result", "[tree]") {
+  test::Rng rng(31);
+  for (int trial = 0; trial < 8; ++trial) {
+    const CompositionTree tree = random_tree(rng, rng.integer(1, 24), false);
+    const Tape tape(tree);
+    CHECK(tape.size() == tree.node_count());
+    std::vector<NodeDiagnostics> diag(tape.size());
+    int pruned = 0;
+    for (int i = 0; i < 3000; ++i) {
+      const Vec3f p = test::to_float(rng.vec(-3.5, 3.5));
+      const FieldSample ref = tree.eval_recursive(p);
+      const FieldSample fast = tape.eval(p);
+      const FieldSample full = tape.eval(p, nullptr, false);
+      const FieldSample withdiag = tape.eval(p, diag.data(), true);
+      INFO("value " << fast.value << " vs " << ref.value << ", gradient " << fast.gradient.x << " "
+                    << fast.gradient.y << " " << fast.gradient.z << " vs " << ref.gradient.x << " "
+                    << ref.gradient.y << " " << ref.gradient.z);
+      REQUIRE(fast.value == ref.value);
+      REQUIRE(fast.gradient == ref.gradient);
+      REQUIRE(full.value == ref.value);
+      REQUIRE(full.gradient == ref.gradient);
+      REQUIRE(withdiag.value == ref.value);
+      for (const auto& d : diag) pruned += d.evaluated ? 0 : 1;
+      if (!tape.support().contains(p)) CHECK(fast.value == 0.f);
+    }
+    if (trial > 0) CHECK(pruned > 0);  // pruning did happen
+  }
+}
+
+TEST_CASE("tree gradients agree with central differences (constant-d operators)", "[tree]") {
+  test::Rng rng(32);
+  int tested = 0;
+  double worst = 0;
+  for (int trial = 0; trial < 4; ++trial) {
+    // Analytic leaves: a grid's gradient is its interpolated stored gradient, not the derivative
+    // of its trilinear value (see the grid tests).
+    const Tape tape(random_tree(rng, 10, true, false));
+    for (int i = 0; i < 2000; ++i) {
+      const Vec3d p = rng.vec(-3, 3);
+      const auto f = [&](const Vec3d& q) { return double(tape.eval(test::to_float(q)).value); };
+      const Vec3d fd = test::central_gradient(f, p, 2e-3);
+      const Vec3d fd2 = test::central_gradient(f, p, 1e-3);
+      // Skip points within a step of a kink (max ties, clamps): there the two steps disagree.
+      if (norm(fd - fd2) > 0.02 * std::max(1.0, norm(fd))) continue;
+      ++tested;
+      const Vec3d g = test::to_double(tape.eval(test::to_float(p)).gradient);
+      worst = std::max(worst, norm(g - fd) / std::max(1.0, norm(fd)));
+    }
+  }
+  INFO("points tested: " << tested << ", worst relative error " << worst);
+  CHECK(tested > 6000);
+  CHECK(worst <= 0.03);
+}
+
+TEST_CASE("updating leaf transforms moves the field rigidly", "[tree]") {
+  test::Rng rng(33);
+  const CompositionTree tree = random_tree(rng, 12, false);
+  Tape tape(tree);
+  const Tape before(tree);
+  const Rigid3f T = random_rigid(rng, 2.0);
+  for (std::size_t l = 0; l < tape.leaves().size(); ++l)
+    tape.set_leaf_transform(l, T * before.leaves()[l].local_to_world);
+  double worst_v = 0, worst_g = 0;
+  for (int i = 0; i < 3000; ++i) {
+    const Vec3f p = test::to_float(rng.vec(-3, 3));
+    const FieldSample a = before.eval(p);
+    const FieldSample b = tape.eval(T.apply(p));
+    worst_v = std::max(worst_v, double(std::abs(a.value - b.value)));
+    worst_g = std::max(worst_g, double(norm(T.rotate(a.gradient) - b.gradient)));
+  }
+  CHECK(worst_v <= 1e-4);
+  CHECK(worst_g <= 1e-3);
+
+  // Moving one leaf equals rebuilding the tree with that leaf moved.
+  Tape one(tree);
+  const Rigid3f M = random_rigid(rng, 0.5);
+  one.set_transform_of(3, M);
+  std::function<CompositionTree(const CompositionTree&)> moved = [&](const CompositionTree& t) {
+    if (t.is_leaf()) return t.id() == 3 ? CompositionTree::leaf(t.field(), M, 3) : t;
+    return CompositionTree::node(t.op(), moved(t.first()), moved(t.second()));
+  };
+  const CompositionTree rebuilt = moved(tree);
+  for (int i = 0; i < 1000; ++i) {
+    const Vec3f p = test::to_float(rng.vec(-3, 3));
+    REQUIRE(one.eval(p).value == rebuilt.eval_recursive(p).value);
+  }
+  CHECK_THROWS_AS(one.set_transform_of(99, M), InputError);
+  CHECK_THROWS_AS(one.set_leaf_transform(999, M), InputError);
+}
+
+TEST_CASE("tape diagnostics report alpha, d, the dominant operand and contact", "[tree]") {
+  auto a = std::make_shared<const SphereField>(Vec3f{-0.3f, 0, 0}, 0.5f);
+  auto b = std::make_shared<const SphereField>(Vec3f{0.3f, 0, 0}, 0.5f);
+  const auto grid = sampled_blend_grid();
+  const Tape tape(
+      CompositionTree::node(NodeOperator::grid_operator(grid, ops::Controller::preset("contact"), "g"),
+                            CompositionTree::leaf(a), CompositionTree::leaf(b)));
+  std::vector<NodeDiagnostics> diag(tape.size());
+  // On the x axis between the centres the gradients are opposite: α = π, d = 1, both inside.
+  tape.eval({0.05f, 0, 0}, diag.data(), true);
+  CHECK(diag[2].alpha == Approx(3.14159).margin(1e-3));
+  CHECK(diag[2].d == Approx(1.0).margin(1e-3));
+  CHECK(diag[2].on_contact == 1);
+  CHECK(diag[2].dominant == 2);  // closer to b's centre
+  // Far from b: a dominates, no contact.
+  tape.eval({-0.8f, 0.1f, 0}, diag.data(), true);
+  CHECK(diag[2].dominant == 1);
+  CHECK(diag[2].on_contact == 0);
+  CHECK(diag[1].evaluated == 0);  // b's leaf pruned
+  // Batch evaluation: every grain gives the same bits.
+  test::Rng rng(34);
+  const Tape big(random_tree(rng, 20, false));
+  std::vector<Vec3f> pts(20000);
+  for (auto& p : pts) p = test::to_float(rng.vec(-3, 3));
+  std::vector<FieldSample> s0(pts.size()), s1(pts.size());
+  big.eval_batch(pts.data(), pts.size(), s0.data(), 0);
+  big.eval_batch(pts.data(), pts.size(), s1.data(), 97);
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    REQUIRE(s0[i].value == s1[i].value);
+    REQUIRE(s0[i].gradient == s1[i].gradient);
+  }
+}
+
+TEST_CASE("deep trees use a heap value stack with the same results", "[tree]") {
+  // Right-deep chain: the value stack holds one entry per leaf (more than the 64 local slots).
+  test::Rng rng(36);
+  auto cap = std::make_shared<const CapsuleField>(Vec3f{0, 0, 0}, Vec3f{0, 0, 0.5f}, 0.2f);
+  CompositionTree t = CompositionTree::leaf(cap, random_rigid(rng, 1.0), 0);
+  for (int i = 1; i < 100; ++i)
+    t = CompositionTree::node(NodeOperator::clean_union(),
+                              CompositionTree::leaf(cap, random_rigid(rng, 1.0), i), t);
+  const Tape tape(t);
+  CHECK(tape.max_stack() == 100);
+  for (int i = 0; i < 500; ++i) {
+    const Vec3f p = test::to_float(rng.vec(-1.5, 1.5));
+    const FieldSample a = tape.eval(p), b = t.eval_recursive(p);
+    REQUIRE(a.value == b.value);
+    REQUIRE(a.gradient == b.gradient);
+  }
+}
+
+TEST_CASE("fast_acos agrees with std::acos", "[tree]") {
+  double worst = 0;
+  for (int i = 0; i <= 200000; ++i) {
+    const float x = -1.f + 2.f * float(i) / 200000.f;
+    worst = std::max(worst, std::abs(double(fast_acos(x)) - std::acos(double(x))));
+  }
+  CHECK(worst <= 2e-6);
+}
+
+TEST_CASE("grid operators must vanish at (0, 0)", "[tree]") {
+  std::vector<float> data(2 * 4 * 4, 0.1f);
+  auto bad = std::make_shared<const ops::GridOperator>(2, 4, data);
+  CHECK_THROWS_WITH(NodeOperator::grid_operator(bad, ops::Controller::preset("contact"), "bad"),
+                    Catch::Contains("bad") && Catch::Contains("compact support"));
+  CHECK_THROWS_AS(CompositionTree::leaf(nullptr), InputError);
+}
+
+namespace {
+
+/// Skeleton: 0 torso (root) - 1 upper arm - 2 forearm - 3 hand, and 0 - 4 head.
+SkeletonParts arm_skeleton() {
+  SkeletonParts s;
+  s.parent = {-1, 0, 1, 2, 0};
+  const Vec3f a[5] = {{0, 0, 0}, {0.2f, 0, 1}, {1.2f, 0, 1}, {2.2f, 0, 1}, {0, 0, 1.2f}};
+  const Vec3f b[5] = {{0, 0, 1.2f}, {1.2f, 0, 1}, {2.2f, 0, 1}, {2.6f, 0, 1}, {0, 0, 1.6f}};
+  for (int i = 0; i < 5; ++i) {
+    s.parts.push_back(std::make_shared<const CapsuleField>(Vec3f{0, 0, 0}, b[i] - a[i], 0.2f));
+    Rigid3f x;
+    x.t = a[i];
+    s.transforms.push_back(x);
+  }
+  return s;
+}
+
+void collect(const CompositionTree& t, std::vector<int>& ids, std::vector<std::string>& ops) {
+  if (t.is_leaf()) {
+    ids.push_back(t.id());
+    return;
+  }
+  ops.push_back(t.op().name);
+  collect(t.first(), ids, ops);
+  collect(t.second(), ids, ops);
+}
+
+}  // namespace
+
+TEST_CASE("2013 builder: neighbouring pairs by their joint operator, then max", "[tree][builder]") {
+  const SkeletonParts s = arm_skeleton();
+  std::vector<JointSetup> joints(5);
+  joints[2].op = NodeOperator::gradient_blend(ops::Controller::preset("blend2013"));  // elbow
+  const CompositionTree t = build_tree_2013(s, joints);
+  std::vector<int> ids;
+  std::vector<std::string> names;
+  collect(t, ids, names);
+  CHECK(ids.size() == 8);                                         // 4 joints, 2 leaves each
+  CHECK(std::count(names.begin(), names.end(), "max") == 3 + 3);  // 3 max pairs + 3 top-level max
+  CHECK(std::count_if(names.begin(), names.end(),
+                      [](const std::string& n) { return n.rfind("gradient", 0) == 0; }) == 1);
+  // The tree is the max over the pair fields.
+  const Tape tape(t);
+  test::Rng rng(35);
+  for (int i = 0; i < 500; ++i) {
+    const Vec3f p = test::to_float(rng.vec(-0.5, 3));
+    float expect = 0;
+    for (int c = 1; c < 5; ++c) {
+      const int pa = s.parent[std::size_t(c)];
+      const CompositionTree pair = CompositionTree::node(
+          joints[std::size_t(c)].op,
+          CompositionTree::leaf(s.parts[std::size_t(pa)], s.transforms[std::size_t(pa)]),
+          CompositionTree::leaf(s.parts[std::size_t(c)], s.transforms[std::size_t(c)]));
+      const FieldSample g = pair.eval_recursive(p);
+      expect = std::max(expect, g.value);
+    }
+    REQUIRE(tape.eval(p).value == Approx(expect).margin(1e-6));
+  }
+}
+
+TEST_CASE("2014 builder: bulge pairs at the bottom, contact nodes up to one root", "[tree][builder]") {
+  const SkeletonParts s = arm_skeleton();
+  const auto grid = sampled_blend_grid();
+  const NodeOperator contact =
+      NodeOperator::grid_operator(grid, ops::Controller::preset("contact"), "contact");
+  const NodeOperator bulge = NodeOperator::grid_operator(grid, ops::Controller::preset("bulge"), "bulge");
+  std::vector<JointSetup> joints(5, JointSetup{contact, false});
+  joints[3] = JointSetup{bulge, true};  // wrist: hand with forearm as a bulge pair
+  const CompositionTree t = build_tree_2014(s, joints);
+  std::vector<int> ids;
+  std::vector<std::string> names;
+  collect(t, ids, names);
+  CHECK(ids.size() == 5);
+  CHECK(std::set<int>(ids.begin(), ids.end()).size() == 5);  // every bone exactly once
+  CHECK(std::count(names.begin(), names.end(), "bulge") == 1);
+  CHECK(std::count(names.begin(), names.end(), "contact") == 3);
+  // The bulge pair sits at the bottom: its node has two leaves (forearm, hand).
+  std::function<bool(const CompositionTree&)> has_bottom_bulge = [&](const CompositionTree& n) {
+    if (n.is_leaf()) return false;
+    if (n.op().name == "bulge")
+      return n.first().is_leaf() && n.second().is_leaf() && n.first().id() == 2 && n.second().id() == 3;
+    return has_bottom_bulge(n.first()) || has_bottom_bulge(n.second());
+  };
+  CHECK(has_bottom_bulge(t));
+  // Non-neighbouring parts (hand 3 and head 4) meet through a contact node: the root.
+  CHECK(t.op().name == "contact");
+  // Bad skeletons are refused by name.
+  SkeletonParts two_roots = s;
+  two_roots.parent[4] = -1;
+  CHECK_THROWS_WITH(build_tree_2014(two_roots, joints), Catch::Contains("second root"));
+  SkeletonParts cycle = s;
+  cycle.parent = {-1, 2, 1, 2, 0};
+  CHECK_THROWS_WITH(build_tree_2013(cycle, joints), Catch::Contains("not one tree"));
+  CHECK_THROWS_AS(build_tree_2013(s, std::vector<JointSetup>(3)), InputError);
+}

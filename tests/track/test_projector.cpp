@@ -1,0 +1,135 @@
+// SPDX-License-Identifier: MIT
+// The 2013 projector: Newton steps (σ = 0.35), 55° contact stop, MVC relaxation, smoothing.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+
+#include "isokit/core/error.h"
+#include "isokit/track/projector2013.h"
+#include "isokit/track/tracker.h"
+#include "test_util.h"
+#include "track/track_fixtures.h"
+
+using namespace isokit;
+using namespace isokit::track;
+using isokit::test::capsule_mesh;
+
+namespace {
+
+constexpr float kPi = 3.14159265358979f;
+
+/// Synthetic field for the contact rule: f = 0.5 - 0.1 z (iso 0.5 at z = 0), whose reported
+/// gradient direction is turned by `turn` radians about y below z = 0.5.
+FieldFunction turning_field(float turn) {
+  return [turn](const Vec3f* p, std::size_t n, float* v, Vec3f* g, std::uint8_t*) {
+    for (std::size_t k = 0; k < n; ++k) {
+      v[k] = 0.5f - 0.1f * p[k].z;
+      const float a = p[k].z < 0.5f ? turn : 0.f;
+      g[k] = Vec3f{std::sin(a), 0.f, -std::cos(a)} * 0.1f;
+    }
+  };
+}
+
+test::Mesh single_triangle(float z) {
+  test::Mesh m;
+  m.V.resize(3, 3);
+  m.V << 0, 0, z, 1, 0, z, 0, 1, z;
+  m.F.resize(1, 3);
+  m.F << 0, 1, 2;
+  return m;
+}
+
+}  // namespace
+
+TEST_CASE("projector 2013: contact stop triggers at the stated angle", "[track][projector]") {
+  const test::Mesh rest = single_triangle(0.f);
+  for (const float deg : {50.f, 54.f, 56.f, 70.f}) {
+    Projector2013 proj(rest.V, rest.F, turning_field(0.f));
+    Positions P = single_triangle(1.f).V;
+    const TrackStats s = proj.project(turning_field(deg * kPi / 180.f), P);
+    INFO("turn " << deg);
+    const bool stopped = deg > 55.f;
+    CHECK(s.contact_vertices == (stopped ? 3 : 0));
+    if (stopped) {
+      // Stopped right after crossing z = 0.5, before any further step.
+      for (int i = 0; i < 3; ++i) CHECK((P(i, 2) < 0.5f && P(i, 2) > 0.2f));
+    } else {
+      CHECK(s.max_residual <= 1e-3f);
+    }
+  }
+  // The 2014 tracker applies the same rule when angle_contacts is on.
+  TrackerOptions o;
+  o.smoothing.smoothing_steps = 0;
+  IsoSurfaceTracker t(rest.V, rest.F, std::vector<float>(3, 0.5f), o);
+  Positions P = single_triangle(1.f).V;
+  CHECK(t.track(turning_field(60.f * kPi / 180.f), {}, P).contact_vertices == 3);
+  P = single_triangle(1.f).V;
+  CHECK(t.track(turning_field(50.f * kPi / 180.f), {}, P).contact_vertices == 0);
+}
+
+TEST_CASE("projector 2013: MVC relaxation leaves the rest pose unchanged", "[track][projector]") {
+  const test::Mesh m = capsule_mesh(0.3f, 0.6f, 20, 16, 5);
+  auto cap = std::make_shared<implicit::CapsuleField>(Vec3f{0, -0.6f, 0}, Vec3f{0, 0.6f, 0}, 0.3f);
+  const FieldFunction f = test::as_function(cap);
+  Projector2013 proj(m.V, m.F, f);
+  std::vector<Vec3f> normals(static_cast<std::size_t>(m.V.rows()));
+  for (Eigen::Index i = 0; i < m.V.rows(); ++i) {
+    const Vec3f g = cap->eval(Vec3f{m.V(i, 0), m.V(i, 1), m.V(i, 2)}).gradient;
+    normals[static_cast<std::size_t>(i)] = g / norm(g);
+  }
+  const float diag = test::diagonal(m.V);
+  Positions P = m.V;
+  proj.relax(normals, 1.f, P);  // full relaxation (μ = 1)
+  CHECK(test::max_distance(P, m.V) <= 1e-5f * diag);
+  // ...whereas a distorted pose is moved.
+  Positions Q = m.V;
+  for (Eigen::Index i = 0; i < Q.rows(); i += 3) Q(i, 1) += 0.02f;
+  Positions Q0 = Q;
+  proj.relax(normals, 1.f, Q);
+  CHECK(test::max_distance(Q, Q0) > 1e-3f);
+  // A full projection from the rest pose with μ forced to 1 also stays put.
+  ProjectorOptions o;
+  o.mu = 1.f;
+  Projector2013 proj1(m.V, m.F, f, o);
+  Positions R = m.V;
+  const TrackStats s = proj1.project(f, R);
+  CHECK(test::max_distance(R, m.V) <= 1e-5f * diag);
+  CHECK(s.contact_vertices == 0);
+  CHECK(s.inverted_triangles == 0);
+}
+
+TEST_CASE("projector 2013: elbow poses are projected onto their iso-values", "[track][projector]") {
+  const test::Mesh m = capsule_mesh(0.3f, 1.0f, 24, 32, 6);
+  test::ElbowField field(0.3f, 1.0f, 48);
+  Projector2013 proj(m.V, m.F, field.function());
+  for (const float deg : {45.f, 90.f}) {
+    const float a = deg * kPi / 180.f;
+    field.set_angle(a);
+    // Initial pose: smooth skinning about the joint (rotation by a weight blended across it).
+    Positions P = m.V;
+    for (Eigen::Index i = 0; i < P.rows(); ++i) {
+      const float w = std::clamp((m.V(i, 1) + 0.3f) / 0.6f, 0.f, 1.f);
+      const Vec3f q = test::rot_z(a * w * w * (3.f - 2.f * w)) * Vec3f{P(i, 0), P(i, 1), P(i, 2)};
+      P.row(i) << q.x, q.y, q.z;
+    }
+    const TrackStats s = proj.project(field.function(), P);
+    INFO("angle " << deg << " residual " << s.max_residual << " contacts " << s.contact_vertices);
+    CHECK(s.max_residual <= 1e-3f);
+    CHECK(P.allFinite());
+    CHECK(s.lost_vertices == 0);
+  }
+}
+
+TEST_CASE("projector 2013: bad input", "[track][projector][errors]") {
+  const test::Mesh m = capsule_mesh(0.5f, 0.f, 8, 0, 4);
+  auto f = test::as_function(std::make_shared<implicit::SphereField>(Vec3f{0, 0, 0}, 0.5f));
+  ProjectorOptions o;
+  o.sigma = 2.f;
+  CHECK_THROWS_WITH(Projector2013(m.V, m.F, f, o), Catch::Contains("sigma"));
+  Triangles F = m.F;
+  F(1, 0) = -3;
+  CHECK_THROWS_WITH(Projector2013(m.V, F, f), Catch::Contains("triangle 1"));
+  Projector2013 p(m.V, m.F, f);
+  Positions short_p = m.V.topRows(2);
+  CHECK_THROWS_WITH(p.project(f, short_p), Catch::Contains("initial positions"));
+}
