@@ -110,7 +110,7 @@ CompositionTree build_tree_2014(const SkeletonParts& s, const std::vector<JointS
     const int q = partner[std::size_t(b)];
     return q >= 0 && s.parent[std::size_t(b)] == q;
   };
-  std::vector<CompositionTree> sub(n, leaf(s, t.root));  // placeholder values, overwritten
+  std::vector<CompositionTree> sub(n, leaf(s, t.root));  // every entry is assigned below
   for (int b : t.finish) {
     if (is_pair_child(b)) continue;  // composed within its parent's unit
     std::vector<int> members{b};
