@@ -56,4 +56,14 @@ void eval_field(const FieldFunction& field, const Vec3f* pts, std::size_t n, flo
 
 void validate_mesh(const Positions& rest, const Triangles& triangles, std::size_t iso_size);
 
+/// Checks the per-call inputs shared by the tracker and the projector: one position per vertex
+/// and a non-empty field function.
+inline void validate_call(const Positions& positions, std::size_t n, const FieldFunction& field) {
+  require(
+      static_cast<std::size_t>(positions.rows()) == n, "initial positions",
+      "have " + std::to_string(positions.rows()) + " rows, the mesh has " + std::to_string(n) + " vertices",
+      "pass one position per vertex");
+  require(static_cast<bool>(field), "field", "is empty", "pass a field function");
+}
+
 }  // namespace isokit::track::detail

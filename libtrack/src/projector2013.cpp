@@ -114,11 +114,7 @@ void Projector2013::relax(const std::vector<Vec3f>& normals, float mu, Positions
 TrackStats Projector2013::project(const FieldFunction& field, Positions& positions) {
   const auto t0 = std::chrono::steady_clock::now();
   const std::size_t n = iso_.size();
-  require(
-      static_cast<std::size_t>(positions.rows()) == n, "initial positions",
-      "have " + std::to_string(positions.rows()) + " rows, the mesh has " + std::to_string(n) + " vertices",
-      "pass one position per vertex");
-  require(static_cast<bool>(field), "field", "is empty", "pass a field function");
+  detail::validate_call(positions, n, field);
   std::vector<Vec3f> cur = detail::to_points(positions, "initial positions");
   std::vector<Vec3f> next(n), grads(n), normal(n, Vec3f{});
   std::vector<float> values(n), resid(n, 0.f);

@@ -66,17 +66,13 @@ TrackStats IsoSurfaceTracker::track(const FieldFunction& field, const std::vecto
                                     Positions& positions) {
   const auto t0 = std::chrono::steady_clock::now();
   const std::size_t n = iso_.size();
-  require(
-      static_cast<std::size_t>(positions.rows()) == n, "initial positions",
-      "have " + std::to_string(positions.rows()) + " rows, the mesh has " + std::to_string(n) + " vertices",
-      "pass one position per vertex");
+  detail::validate_call(positions, n, field);
   require(rotations.empty() || rotations.size() == n, "rotations",
           "size " + std::to_string(rotations.size()) + " differs from the vertex count " + std::to_string(n),
           "pass one rotation per vertex or none (identity)");
   for (std::size_t i = 0; i < rotations.size(); ++i)
     for (float v : rotations[i].m)
       require(std::isfinite(v), "rotation " + std::to_string(i), "is not finite", "pass finite rotations");
-  require(static_cast<bool>(field), "field", "is empty", "pass a field function");
   std::vector<Vec3f> cur = detail::to_points(positions, "initial positions");
   std::vector<Vec3f> next(n), grads(n), normal(n, Vec3f{});
   std::vector<float> values(n), moves(n), damping(n, 1.f);
