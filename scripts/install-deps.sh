@@ -13,6 +13,7 @@ packages=(
   libopenmesh-dev                         # mesh I/O and topology
   libboost-graph-dev                      # skeleton topology
   libassimp-dev                           # rig loading (glTF, FBX, COLLADA)
+  libcgal-dev                             # exact self-intersection counts (skin metrics)
   libcli11-dev nlohmann-json3-dev         # command lines, JSON
   libcairo2-dev                           # 2D figures (PNG/SVG/PDF)
   libglfw3-dev libimgui-dev               # interactive GUIs
