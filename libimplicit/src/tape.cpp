@@ -6,6 +6,10 @@
 #include <functional>
 #include <new>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include "isokit/core/error.h"
 #include "isokit/implicit/grid_field.h"
 
@@ -163,7 +167,23 @@ Tape::Tape(const CompositionTree& tree) {
       in.kind = n->op.kind;
       in.op = std::int32_t(controllers_.size());
       controllers_.push_back(n->op.controller);
-      grids_.push_back(n->op.grid ? n->op.grid->view() : operators::GridOperatorView{});
+      operators::GridOperatorView gv{};
+      if (n->op.grid) {
+        // One padded copy per grid operator (edge-free stencils; same results), shared by the
+        // nodes that use it and by copies of the tape.
+        std::size_t same = 0;
+        while (same < grid_owners_.size() && grid_owners_[same] != n->op.grid) ++same;
+        if (same < grid_owners_.size()) {
+          gv = grids_[same];
+        } else {
+          gv = n->op.grid->view();
+          auto padded = std::make_shared<std::vector<float>>(gv.padded_size());
+          gv.fill_padded(padded->data());
+          gv.padded = padded->data();
+          padded_grids_.push_back(std::move(padded));
+        }
+      }
+      grids_.push_back(gv);
       grid_owners_.push_back(n->op.grid);
       const std::int32_t self = std::int32_t(instr_.size());
       instr_[std::size_t(a)].chain_parent = self;  // the first child starts this subtree
@@ -175,10 +195,63 @@ Tape::Tape(const CompositionTree& tree) {
     }
     require(stack.size() <= 8192, "composition tree", "is deeper than 4096", "build a balanced tree");
   }
+  build_sparse();
   update_boxes();
 }
 
+void Tape::build_sparse() {
+  const std::size_t L = leaves_.size();
+  sparse_ = L >= 2 && L <= kSparseMaxLeaves;
+  if (!sparse_) return;
+  // Post-order pass: the leaf range of every node, and the lowest common ancestor of every pair
+  // of leaves (the node where the first leaf is under its first child, the second under its
+  // second child).
+  struct Item {
+    std::int32_t lo, hi;
+  };
+  std::vector<Item> st;
+  lca_.assign(L * L, 0);
+  for (const TapeInstr& in : instr_) {
+    if (in.leaf >= 0) {
+      st.push_back({in.leaf, in.leaf + 1});
+      continue;
+    }
+    const Item b = st.back();
+    st.pop_back();
+    const Item a = st.back();
+    st.pop_back();
+    const std::size_t self = sparse_nodes_.size();
+    for (std::int32_t i = a.lo; i < a.hi; ++i)
+      for (std::int32_t j = b.lo; j < b.hi; ++j)
+        lca_[std::size_t(i) * L + std::size_t(j)] = std::uint8_t(self);
+    sparse_nodes_.push_back(SparseNode{in.kind, in.op, b.lo});
+    st.push_back({a.lo, b.hi});
+  }
+  frame_stride_ = (L + 3) / 4 * 4;
+}
+
 void Tape::update_boxes() {
+  if (sparse_) {
+    // The leaves' frames and local boxes, one row per coordinate (see tape.h).
+    const std::size_t m = frame_stride_;
+    leaf_frames_.assign(18 * m, 0.f);
+    for (std::size_t k = 0; k < m; ++k) {
+      Box3f box;  // padding: empty
+      box.lo = Vec3f{INFINITY, INFINITY, INFINITY};
+      box.hi = Vec3f{-INFINITY, -INFINITY, -INFINITY};
+      if (k < leaves_.size()) {
+        const TapeLeaf& l = leaves_[k];
+        for (std::size_t c = 0; c < 9; ++c) leaf_frames_[c * m + k] = l.local_to_world.R.m[c];
+        for (int c = 0; c < 3; ++c) leaf_frames_[std::size_t(9 + c) * m + k] = l.local_to_world.t[c];
+        // A grid leaf's box is the one eval_grid tests; any field is 0 outside its support.
+        box = l.grid.nodes ? l.grid.box : fields_[std::size_t(l.field)]->support();
+      }
+      for (int c = 0; c < 3; ++c) {
+        leaf_frames_[std::size_t(12 + c) * m + k] = box.lo[c];
+        leaf_frames_[std::size_t(15 + c) * m + k] = box.hi[c];
+      }
+    }
+  }
   std::vector<std::int32_t> st;
   for (std::size_t i = 0; i < instr_.size(); ++i) {
     TapeInstr& in = instr_[i];
@@ -221,6 +294,153 @@ void Tape::set_transform_of(int id, const Rigid3f& xf) {
   require(any, "tape leaf id " + std::to_string(id), "tags no leaf",
           "use the id given to CompositionTree::leaf");
   update_boxes();
+}
+
+namespace {
+
+/// Index of the lowest / highest set bit of m != 0.
+int lowest_bit(std::uint64_t m) {
+#if defined(__GNUC__)
+  return __builtin_ctzll(m);
+#else
+  int i = 0;
+  while (!(m & 1)) m >>= 1, ++i;
+  return i;
+#endif
+}
+int highest_bit(std::uint64_t m) {
+#if defined(__GNUC__)
+  return 63 - __builtin_clzll(m);
+#else
+  int i = 0;
+  while (m >>= 1) ++i;
+  return i;
+#endif
+}
+
+/// Bit k set when leaf k's local box contains its local point `q_k = R_k^T (p - t_k)`, written to
+/// q (3 rows of `m` floats). `frames`: see Tape::leaf_frames_. The same operations, in the same
+/// order, as `Rigid3f::apply_inverse` and `Box3f::contains` (the same bits).
+std::uint64_t local_points(const float* frames, std::size_t m, const Vec3f& p, float* q) {
+  std::uint64_t mask = 0;
+  const float* R = frames;
+  const float* t = frames + 9 * m;
+  const float* lo = frames + 12 * m;
+  const float* hi = frames + 15 * m;
+#if defined(__SSE2__)
+  const __m128 px = _mm_set1_ps(p.x), py = _mm_set1_ps(p.y), pz = _mm_set1_ps(p.z);
+  for (std::size_t k = 0; k < m; k += 4) {
+    const __m128 dx = _mm_sub_ps(px, _mm_loadu_ps(t + k)), dy = _mm_sub_ps(py, _mm_loadu_ps(t + m + k)),
+                 dz = _mm_sub_ps(pz, _mm_loadu_ps(t + 2 * m + k));
+    __m128 in = _mm_set1_ps(0.f);
+    for (std::size_t c = 0; c < 3; ++c) {
+      // q_c = (R[c] dx + R[3 + c] dy) + R[6 + c] dz
+      const __m128 qc = _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_loadu_ps(R + c * m + k), dx),
+                                              _mm_mul_ps(_mm_loadu_ps(R + (3 + c) * m + k), dy)),
+                                   _mm_mul_ps(_mm_loadu_ps(R + (6 + c) * m + k), dz));
+      _mm_store_ps(q + c * m + k, qc);
+      const __m128 ok = _mm_and_ps(_mm_cmpge_ps(qc, _mm_loadu_ps(lo + c * m + k)),
+                                   _mm_cmple_ps(qc, _mm_loadu_ps(hi + c * m + k)));
+      in = c == 0 ? ok : _mm_and_ps(in, ok);
+    }
+    mask |= std::uint64_t(_mm_movemask_ps(in)) << k;
+  }
+#else
+  for (std::size_t k = 0; k < m; ++k) {
+    const float dx = p.x - t[k], dy = p.y - t[m + k], dz = p.z - t[2 * m + k];
+    bool in = true;
+    for (std::size_t c = 0; c < 3; ++c) {
+      const float qc = R[c * m + k] * dx + R[(3 + c) * m + k] * dy + R[(6 + c) * m + k] * dz;
+      q[c * m + k] = qc;
+      in = in & (qc >= lo[c * m + k]) & (qc <= hi[c * m + k]);
+    }
+    mask |= std::uint64_t(in) << k;
+  }
+#endif
+  return mask;
+}
+
+}  // namespace
+
+FieldSample Tape::eval(const Vec3f& p) const {
+  return sparse_ ? eval_sparse(p) : eval(p, nullptr, true);
+}
+
+void Tape::eval_batch(const Vec3f* points, std::size_t n, FieldSample* out, std::size_t grain) const {
+  parallel_for(n, grain, [&](std::size_t begin, std::size_t end) {
+    if (!sparse_) {
+      for (std::size_t i = begin; i < end; ++i) out[i] = eval(points[i], nullptr, true);
+      return;
+    }
+    // Blocks of points, in three passes: the leaves of every point; the result of every point
+    // with at most one non-zero leaf (read without a branch: slot L of a row stays 0); then the
+    // compositions of the other points, back to back.
+    constexpr std::size_t kBlock = 32;
+    const std::size_t L = leaves_.size(), row = L + 1;
+    std::vector<FieldSample> samples(kBlock * row);
+    std::uint64_t masks[kBlock];
+    std::uint32_t pending[kBlock];
+    for (std::size_t b0 = begin; b0 < end; b0 += kBlock) {
+      const std::size_t count = std::min(kBlock, end - b0);
+      for (std::size_t j = 0; j < count; ++j)
+        masks[j] = eval_leaves(points[b0 + j], samples.data() + j * row);
+      std::size_t np = 0;
+      for (std::size_t j = 0; j < count; ++j) {
+        const std::uint64_t leaves = masks[j];
+        out[b0 + j] = samples[j * row + std::size_t(lowest_bit(leaves | (std::uint64_t(1) << L)))];
+        pending[np] = std::uint32_t(j);
+        np += (leaves & (leaves - 1)) != 0;
+      }
+      for (std::size_t i = 0; i < np; ++i) {
+        const std::size_t j = pending[i];
+        out[b0 + j] = compose_sparse(masks[j], samples.data() + j * row);
+      }
+    }
+  });
+}
+
+std::uint64_t Tape::eval_leaves(const Vec3f& p, FieldSample* samples) const {
+  // The point in every leaf's frame, and which leaves' local boxes contain it; only those are
+  // evaluated, and only the ones with a non-zero value are kept (a leaf with value 0 is passed
+  // over by every node above it, whatever its gradient, as by compose_node).
+  const std::size_t m = frame_stride_;
+  alignas(16) float q[3 * ((kSparseMaxLeaves + 3) / 4 * 4)];  // 3 rows of frame_stride_
+  std::uint64_t todo = local_points(leaf_frames_.data(), m, p, q), nonzero = 0;
+  while (todo) {
+    const int k = lowest_bit(todo);
+    todo &= todo - 1;
+    const TapeLeaf& l = leaves_[std::size_t(k)];
+    const Vec3f local{q[std::size_t(k)], q[m + std::size_t(k)], q[2 * m + std::size_t(k)]};
+    FieldSample s =
+        l.grid.nodes ? eval_grid_inside(l.grid, local) : fields_[std::size_t(l.field)]->eval(local);
+    s.gradient = l.local_to_world.rotate(s.gradient);
+    samples[k] = s;  // read only when non-zero (no branch: the outcome is data dependent)
+    nonzero |= std::uint64_t(s.value != 0.f) << k;
+  }
+  return nonzero;
+}
+
+FieldSample Tape::eval_sparse(const Vec3f& p) const {
+  alignas(FieldSample) unsigned char raw[kSparseMaxLeaves * sizeof(FieldSample)];
+  FieldSample* samples = reinterpret_cast<FieldSample*>(raw);  // only non-zero leaves are read
+  const std::uint64_t leaves = eval_leaves(p, samples);
+  if (!leaves) return {};
+  if (!(leaves & (leaves - 1))) return samples[lowest_bit(leaves)];  // passed through to the root
+  return compose_sparse(leaves, samples);
+}
+
+FieldSample Tape::compose_sparse(std::uint64_t leaves, const FieldSample* samples) const {
+  // `leaves` has two bits or more. The smallest subtree holding them all is rooted at the lowest
+  // common ancestor of the leftmost and the rightmost one: its first child holds the leftmost
+  // leaf, its second child the rightmost, so both operands are compositions of non-zero leaves.
+  // Every node between passes its one non-zero operand through unchanged (compose_node's rule).
+  const int a = lowest_bit(leaves), b = highest_bit(leaves);
+  const SparseNode& node = sparse_nodes_[lca_[std::size_t(a) * leaves_.size() + std::size_t(b)]];
+  const std::uint64_t first = leaves & ((std::uint64_t(1) << node.mid) - 1), second = leaves & ~first;
+  const FieldSample fa = (first & (first - 1)) ? compose_sparse(first, samples) : samples[a];
+  const FieldSample fb = (second & (second - 1)) ? compose_sparse(second, samples) : samples[b];
+  const std::size_t o = std::size_t(node.op);
+  return compose_node(node.kind, controllers_[o], grids_[o], fa, fb, nullptr);
 }
 
 FieldSample Tape::eval(const Vec3f& p, NodeDiagnostics* diag, bool prune) const {

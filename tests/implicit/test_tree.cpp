@@ -7,7 +7,9 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <memory>
 #include <set>
+#include <vector>
 
 #include "isokit/core/error.h"
 #include "isokit/implicit/grid_field.h"
@@ -222,6 +224,103 @@ TEST_CASE("deep trees use a heap value stack with the same results", "[tree]") {
     const FieldSample a = tape.eval(p), b = t.eval_recursive(p);
     REQUIRE(a.value == b.value);
     REQUIRE(a.gradient == b.gradient);
+  }
+}
+
+TEST_CASE("sparse tape evaluation equals the reference up to 63 leaves and beyond", "[tree][slow]") {
+  // Trees of up to 63 leaves take the sparse path (leaf boxes tested at once, only nodes with two
+  // non-zero operands composed); larger trees the instruction loop. Both equal the recursive
+  // reference and the instruction loop with pruning bit for bit, point by point and in batches.
+  test::Rng rng(37);
+  for (const int n : {2, 5, 62, 63, 64}) {
+    const CompositionTree tree = random_tree(rng, n, false);
+    const Tape tape(tree);
+    std::vector<Vec3f> pts(4001);
+    for (auto& p : pts) p = test::to_float(rng.vec(-3.5, 3.5));
+    std::vector<FieldSample> batch(pts.size()), serial(pts.size());
+    tape.eval_batch(pts.data(), pts.size(), batch.data(), 0);
+    tape.eval_batch(pts.data(), pts.size(), serial.data(), 7);
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+      const FieldSample ref = tree.eval_recursive(pts[i]);
+      const FieldSample loop = tape.eval(pts[i], nullptr, true);
+      const FieldSample fast = tape.eval(pts[i]);
+      INFO(n << " leaves, point " << i);
+      REQUIRE(fast.value == ref.value);
+      REQUIRE(fast.gradient == ref.gradient);
+      REQUIRE(loop.value == ref.value);
+      REQUIRE(loop.gradient == ref.gradient);
+      REQUIRE(batch[i].value == ref.value);
+      REQUIRE(batch[i].gradient == ref.gradient);
+      REQUIRE(serial[i].value == ref.value);
+      REQUIRE(serial[i].gradient == ref.gradient);
+    }
+  }
+}
+
+TEST_CASE("sparse tape evaluation on the faces of grid leaves' boxes", "[tree]") {
+  // Grid leaves placed by the identity and by quarter turns (exact in float): points exactly on
+  // a box face, edge or corner are inside (the sparse path must test the box as eval_grid does).
+  const auto cap = std::make_shared<const CapsuleField>(Vec3f{0, 0, 0}, Vec3f{0, 0, 0.5f}, 0.3f);
+  const auto grid = std::make_shared<const GridField>(*cap, Box3f{}, GridFieldOptions{9, 0});
+  Rigid3f turn;
+  turn.R.m[0] = 0, turn.R.m[1] = -1, turn.R.m[3] = 1, turn.R.m[4] = 0;  // 90° about z
+  turn.t = Vec3f{0.25f, 0.f, 0.125f};
+  const CompositionTree tree = CompositionTree::node(
+      NodeOperator::grid_operator(sampled_blend_grid(), ops::Controller::preset("contact"), "g"),
+      CompositionTree::leaf(grid), CompositionTree::leaf(grid, turn));
+  const Tape tape(tree);
+  const Box3f b = grid->support();
+  test::Rng rng(38);
+  int on_face = 0;
+  for (int i = 0; i < 20000; ++i) {
+    Vec3f p = test::to_float(rng.vec(-1, 1));
+    for (int a = 0; a < 3; ++a) {
+      const int pick = rng.integer(0, 3);  // lo, hi, or leave
+      if (pick < 2) p[a] = pick == 0 ? b.lo[a] : b.hi[a];
+    }
+    if (rng.integer(0, 1)) p = turn.apply(p);  // on the second leaf's faces
+    const FieldSample ref = tree.eval_recursive(p), fast = tape.eval(p);
+    on_face += ref.value != 0.f;
+    REQUIRE(fast.value == ref.value);
+    REQUIRE(fast.gradient == ref.gradient);
+  }
+  CHECK(on_face > 100);
+}
+
+TEST_CASE("vectorised and scalar grid interpolation agree bit for bit", "[tree]") {
+  // eval_grid_inside (SSE2 on x86 hosts) against eval_grid_inside_scalar (the device code),
+  // inside the box, on its faces and at its corners.
+  test::Rng rng(39);
+  const auto cap = std::make_shared<const CapsuleField>(Vec3f{0, 0, 0}, Vec3f{0.2f, 0.1f, 0.7f}, 0.25f);
+  for (const int res : {2, 3, 12, 32}) {
+    const GridField grid(*cap, Box3f{}, GridFieldOptions{res, 0});
+    const GridView v = grid.view();
+    for (int i = 0; i < 20000; ++i) {
+      Vec3f p;
+      for (int a = 0; a < 3; ++a) {
+        const int pick = rng.integer(0, 5);
+        p[a] = pick == 0   ? v.box.lo[a]
+               : pick == 1 ? v.box.hi[a]
+                           : float(rng.uniform(v.box.lo[a], v.box.hi[a]));
+      }
+      const FieldSample a = eval_grid_inside(v, p), b = eval_grid_inside_scalar(v, p);
+      REQUIRE(a.value == b.value);
+      REQUIRE(a.gradient == b.gradient);
+      const FieldSample c = eval_grid(v, p);
+      REQUIRE(c.value == a.value);
+    }
+  }
+}
+
+TEST_CASE("a copied tape outlives the original", "[tree]") {
+  test::Rng rng(40);
+  const CompositionTree tree = random_tree(rng, 12, false);
+  auto original = std::make_unique<Tape>(tree);
+  const Tape copy = *original;
+  original.reset();  // the copy shares the padded grid operators
+  for (int i = 0; i < 2000; ++i) {
+    const Vec3f p = test::to_float(rng.vec(-3, 3));
+    REQUIRE(copy.eval(p).value == tree.eval_recursive(p).value);
   }
 }
 

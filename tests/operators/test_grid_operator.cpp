@@ -2,6 +2,8 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <utility>
+#include <vector>
 
 #include "isokit/core/error.h"
 #include "isokit/operators/biharmonic.h"
@@ -19,7 +21,8 @@ GridOperator sampled(int nd, int nf) {
   for (int k = 0; k < nd; ++k)
     for (int i = 0; i < nf; ++i)
       for (int j = 0; j < nf; ++j) {
-        const double f1 = double(i) / (nf - 1), f2 = double(j) / (nf - 1), d = double(k) / (nd - 1);
+        const double f1 = double(i) / (nf - 1), f2 = double(j) / (nf - 1),
+                     d = nd > 1 ? double(k) / (nd - 1) : 0.0;
         v[(static_cast<std::size_t>(k) * nf + i) * nf + j] =
             float(0.3 * std::sin(2 * f1 + d) + f2 * f2 * (1 + 0.5 * d) + 0.2 * f1 * f2);
       }
@@ -83,4 +86,88 @@ TEST_CASE("grid operator: clamps inputs, rejects bad shapes", "[operators][grid]
   CHECK(g.eval(0.5f, 2.f, 3.f).g == g.eval(0.5f, 1.f, 1.f).g);
   CHECK_THROWS_AS(GridOperator(2, 4, std::vector<float>(5)), InputError);
   CHECK_THROWS_AS(GridOperator(1, 1, std::vector<float>(1)), InputError);
+}
+
+namespace {
+
+/// A random input in [-0.1, 1.1]: often exactly on a node, on 0 or 1, or just beside them.
+float random_input(test::Rng& rng, int nodes) {
+  switch (rng.integer(0, 4)) {
+    case 0:
+      return float(rng.integer(0, nodes - 1)) / float(nodes - 1);  // a node (0 and 1 included)
+    case 1:
+      return float(rng.integer(0, 1)) + float(rng.uniform(-1e-3, 1e-3));  // near an edge
+    case 2:
+      return float(rng.uniform(-0.1, 1.1));  // clamped when outside
+    default:
+      return float(rng.uniform(0, 1));
+  }
+}
+
+}  // namespace
+
+TEST_CASE("grid operator: the direct and padded stencil paths equal the ghosted path bit for bit",
+          "[operators][grid]") {
+  // Interior stencils are read directly, edge stencils through ghost(); with a padded copy every
+  // stencil is read from it. All must give eval_ghosted's bits (also at the edges, on nodes and
+  // outside [0, 1]), for small grids where every stencil touches an edge.
+  test::Rng rng(22);
+  for (const auto& [nd, nf] : {std::pair{9, 17}, std::pair{1, 9}, std::pair{2, 2}, std::pair{3, 3},
+                               std::pair{4, 4}, std::pair{16, 128}}) {
+    const GridOperator g = sampled(nd, nf);
+    const auto v = g.view();
+    std::vector<float> padded(v.padded_size());
+    v.fill_padded(padded.data());
+    auto pv = v;
+    pv.padded = padded.data();
+    for (int i = 0; i < 20000; ++i) {
+      const float f1 = random_input(rng, nf), f2 = random_input(rng, nf), d = random_input(rng, nd);
+      const auto ref = v.eval_ghosted(f1, f2, d);
+      for (const auto& s : {v.eval(f1, f2, d), pv.eval(f1, f2, d)}) {
+        INFO("nd " << nd << " nf " << nf << " f1 " << f1 << " f2 " << f2 << " d " << d);
+        REQUIRE(s.g == ref.g);
+        REQUIRE(s.dg1 == ref.dg1);
+        REQUIRE(s.dg2 == ref.dg2);
+      }
+    }
+    // The padded copy holds ghost() around the grid and the nodes inside.
+    for (int k = 0; k < nd; ++k)
+      for (int i1 = -1; i1 <= nf; ++i1)
+        for (int i2 = -1; i2 <= nf; ++i2)
+          REQUIRE(
+              padded[(std::size_t(k) * (nf + 2) + std::size_t(i1 + 1)) * (nf + 2) + std::size_t(i2 + 1)] ==
+              v.ghost(k, i1, i2));
+  }
+}
+
+TEST_CASE("grid operator: vectorised and scalar bicubic agree bit for bit; weights", "[operators][grid]") {
+  // bicubic (SSE2 on x86 hosts) against bicubic_scalar (the device code) on random stencils,
+  // with and without a blend towards a second slice.
+  test::Rng rng(23);
+  float rows[2][4][6];
+  for (int i = 0; i < 20000; ++i) {
+    for (auto& slice : rows)
+      for (auto& row : slice)
+        for (float& x : row) x = float(rng.uniform(-2, 2));
+    const float w = rng.integer(0, 1) ? 0.f : float(rng.uniform(0, 1));
+    const float t1 = float(rng.uniform(0, 1)), t2 = i % 7 == 0 ? 0.f : float(rng.uniform(0, 1));
+    const auto a = operators::GridOperatorView::bicubic(&rows[0][0][1], 6, 24, w, t1, t2, 127.f);
+    const auto b = operators::GridOperatorView::bicubic_scalar(&rows[0][0][1], 6, 24, w, t1, t2, 127.f);
+    REQUIRE(a.g == b.g);
+    REQUIRE(a.dg1 == b.dg1);
+    REQUIRE(a.dg2 == b.dg2);
+  }
+  // Catmull-Rom weights: a partition of unity, exact at the cell ends.
+  for (int i = 0; i <= 1000; ++i) {
+    const float t = float(i) / 1000.f;
+    float w[4], dw[4];
+    operators::GridOperatorView::catmull_rom(t, w, dw);
+    CHECK(w[0] + w[1] + w[2] + w[3] == Approx(1.0).margin(1e-6));
+    CHECK(dw[0] + dw[1] + dw[2] + dw[3] == Approx(0.0).margin(1e-6));
+    if (i == 0 || i == 1000) {
+      CHECK(w[i == 0 ? 1 : 2] == 1.f);
+      CHECK(w[0] == 0.f);
+      CHECK(w[3] == 0.f);
+    }
+  }
 }

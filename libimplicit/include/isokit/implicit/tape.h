@@ -11,10 +11,21 @@
 /// ancestors along first-child links, `chain_parent`). Pruning changes no result: pruned
 /// subtrees are exactly 0 with a 0 gradient.
 ///
+/// Sparse evaluation (`eval(p)` and `eval_batch` of trees with at most 63 leaves; the other modes
+/// run the instruction loop): the point is taken into every leaf's frame at once and tested
+/// against the leaf's local support box (tighter than its world box); only the leaves containing
+/// it are evaluated, and only the nodes whose two operands are both non-zero are composed: the
+/// lowest common ancestor of the leftmost and rightmost non-zero leaves, recursively in its two
+/// subtrees. Every node in between would pass its non-zero operand through unchanged (the
+/// pass-through rule of `compose_node`), so the result is the recursive evaluation's bit for
+/// bit. Grid operators are read from a copy padded with their ghost nodes (one per operator,
+/// shared by copies of the tape; `GridOperatorView::padded`), with the same results.
+///
 /// \note Field convention: values in [0, 1], inside > 0.5, gradients inward, compact support.
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "isokit/implicit/field.h"
@@ -46,11 +57,15 @@ class Tape final : public Field {
   /// \throw InputError if the tree is deeper than 4096.
   explicit Tape(const CompositionTree& tree);
 
-  FieldSample eval(const Vec3f& p) const override { return eval(p, nullptr, true); }
+  FieldSample eval(const Vec3f& p) const override;
   /// With `diag` (size() entries, indexed by instruction; leaves get their value only) and
   /// optional pruning (off: every instruction is evaluated; same result).
   FieldSample eval(const Vec3f& p, NodeDiagnostics* diag, bool prune) const;
   Box3f support() const override;
+  /// The same results as `eval` point by point, without a virtual call per point.
+  void eval_batch(const Vec3f* points, std::size_t n, FieldSample* out,
+                  std::size_t grain = kDefaultGrain) const override;
+  using Field::eval_batch;
 
   /// Moves one leaf (by its position among the leaves, post-order) or every leaf tagged `id`;
   /// the boxes are updated, nothing is rebuilt. Not to be called while other threads evaluate.
@@ -65,12 +80,34 @@ class Tape final : public Field {
 
  private:
   void update_boxes();
+  void build_sparse();
+  FieldSample eval_sparse(const Vec3f& p) const;
+  std::uint64_t eval_leaves(const Vec3f& p, FieldSample* samples) const;
+  FieldSample compose_sparse(std::uint64_t leaves, const FieldSample* samples) const;
+
+  /// Inner node for the sparse evaluation: operator, and the first leaf under its second child
+  /// (leaves are numbered in post-order, so each subtree holds a range of them).
+  struct SparseNode {
+    OpKind kind{OpKind::Max};
+    std::int32_t op{-1};
+    std::int32_t mid{0};
+  };
+  static constexpr std::size_t kSparseMaxLeaves = 63;
+  bool sparse_{false};           ///< at most kSparseMaxLeaves leaves and a root node
+  std::size_t frame_stride_{0};  ///< leaf count padded to a multiple of 4
+  /// Per leaf, in rows of frame_stride_ floats: R (9 rows, row-major), t (3), and the local
+  /// support box lo (3), hi (3). Padding leaves have an empty box.
+  std::vector<float> leaf_frames_;
+  /// lca_[a * leaves + b], a < b: the smallest node (index into sparse_nodes_) above leaves a, b.
+  std::vector<std::uint8_t> lca_;
+  std::vector<SparseNode> sparse_nodes_;
   std::vector<TapeInstr> instr_;
   std::vector<TapeLeaf> leaves_;
   std::vector<FieldPtr> fields_;
   std::vector<operators::ControllerTable> controllers_;
   std::vector<operators::GridOperatorView> grids_;
   std::vector<std::shared_ptr<const operators::GridOperator>> grid_owners_;
+  std::vector<std::shared_ptr<const std::vector<float>>> padded_grids_;  ///< GridOperatorView::padded
   int max_stack_{0};
 };
 

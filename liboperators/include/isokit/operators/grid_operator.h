@@ -11,6 +11,10 @@
 /// of the grid values. Beyond the grid edges the samples are extrapolated linearly (ghost
 /// `2 g[0] - g[1]`), so the derivative at an edge node is the one-sided difference. Inputs
 /// outside [0, 1] are clamped. The `d` dependence is not differentiated (see operator.h).
+///
+/// Evaluation reads the 4 × 4 stencil directly where it lies on the grid, through `ghost` at the
+/// edges, or from a copy padded with the ghost nodes (`GridOperatorView::padded`, no edge cases).
+/// Every path gives the same bits, and x86 hosts (SSE2) the same bits as the scalar device code.
 #pragma once
 
 #include <cstddef>
@@ -19,6 +23,13 @@
 #include "isokit/core/hostdev.h"
 #include "isokit/operators/operator.h"
 
+// Host builds with SSE2 evaluate the bicubic four lanes at a time, with the scalar code's
+// operations in the scalar code's order (the same results bit for bit).
+#if defined(__SSE2__) && !defined(__CUDACC__)
+#include <emmintrin.h>
+#define ISOKIT_GRID_OPERATOR_SSE2 1
+#endif
+
 namespace isokit::operators {
 
 /// Plain-data view of a grid operator (host or device memory); evaluation is inline.
@@ -26,6 +37,11 @@ struct GridOperatorView {
   const float* data{nullptr};
   int nd{0};  ///< number of d slices (≥ 1)
   int nf{0};  ///< nodes per f axis (≥ 2)
+  /// Optional: the same slices with one `ghost` node added on each side of both f axes,
+  /// `padded[(k * (nf + 2) + i1 + 1) * (nf + 2) + i2 + 1] = ghost(k, i1, i2)` (see
+  /// `padded_size`, `fill_padded`). When set, `eval` reads every stencil from it, with no edge
+  /// cases; the results are the same bit for bit.
+  const float* padded{nullptr};
 
   ISOKIT_HOSTDEV float node(int k, int i1, int i2) const {
     return data[(static_cast<std::size_t>(k) * nf + i1) * nf + i2];
@@ -45,60 +61,177 @@ struct GridOperatorView {
     if (w1 != 1.f && w2 != 1.f) v += (1.f - w1) * (1.f - w2) * node(k, b1, b2);
     return v;
   }
+  /// Number of floats of the padded copy: `nd (nf + 2)²`.
+  ISOKIT_HOSTDEV std::size_t padded_size() const {
+    return static_cast<std::size_t>(nd) * static_cast<std::size_t>(nf + 2) * static_cast<std::size_t>(nf + 2);
+  }
+  /// Writes the padded copy (`padded_size()` floats) to `out`.
+  ISOKIT_HOSTDEV void fill_padded(float* out) const {
+    for (int k = 0; k < nd; ++k)
+      for (int i1 = -1; i1 <= nf; ++i1)
+        for (int i2 = -1; i2 <= nf; ++i2)
+          out[(static_cast<std::size_t>(k) * (nf + 2) + (i1 + 1)) * (nf + 2) + (i2 + 1)] = ghost(k, i1, i2);
+  }
 
+  /// Catmull-Rom weights `w` of the four stencil nodes at `t` ∈ [0, 1] and their derivatives
+  /// `dw` (Horner form; exact at t = 0 and t = 1).
   static ISOKIT_HOSTDEV void catmull_rom(float t, float w[4], float dw[4]) {
-    const float t2 = t * t, t3 = t2 * t;
-    w[0] = 0.5f * (-t3 + 2.f * t2 - t);
-    w[1] = 0.5f * (3.f * t3 - 5.f * t2 + 2.f);
-    w[2] = 0.5f * (-3.f * t3 + 4.f * t2 + t);
-    w[3] = 0.5f * (t3 - t2);
-    dw[0] = 0.5f * (-3.f * t2 + 4.f * t - 1.f);
-    dw[1] = 0.5f * (9.f * t2 - 10.f * t);
-    dw[2] = 0.5f * (-9.f * t2 + 8.f * t + 1.f);
-    dw[3] = 0.5f * (3.f * t2 - 2.f * t);
+    // w = ((a t + b) t + c) t + d, dw = (3a t + 2b) t + c per node (catmull_rom4 does the same
+    // operations lane by lane).
+    w[0] = ((-0.5f * t + 1.f) * t + -0.5f) * t + 0.f;
+    w[1] = ((1.5f * t + -2.5f) * t + 0.f) * t + 1.f;
+    w[2] = ((-1.5f * t + 2.f) * t + 0.5f) * t + 0.f;
+    w[3] = ((0.5f * t + -0.5f) * t + 0.f) * t + 0.f;
+    dw[0] = (-1.5f * t + 2.f) * t + -0.5f;
+    dw[1] = (4.5f * t + -5.f) * t + 0.f;
+    dw[2] = (-4.5f * t + 4.f) * t + 0.5f;
+    dw[3] = (1.5f * t + -1.f) * t + 0.f;
+  }
+
+  /// Cell `i` (in [0, nf - 2]) and position `t` in it of `f`, clamped to [0, 1].
+  ISOKIT_HOSTDEV void locate(float f, int& i, float& t) const {
+    f = f < 0.f ? 0.f : (f > 1.f ? 1.f : f);
+    const float x = f * float(nf - 1);
+    i = int(x);
+    i = i > nf - 2 ? nf - 2 : i;
+    t = x - float(i);
   }
 
   /// Bicubic evaluation of slice `k`.
   ISOKIT_HOSTDEV OpSample eval_slice(int k, float f1, float f2) const {
-    const float s = float(nf - 1);
-    f1 = f1 < 0.f ? 0.f : (f1 > 1.f ? 1.f : f1);
-    f2 = f2 < 0.f ? 0.f : (f2 > 1.f ? 1.f : f2);
-    const float x1 = f1 * s, x2 = f2 * s;
-    int i1 = int(x1), i2 = int(x2);
-    i1 = i1 > nf - 2 ? nf - 2 : i1;
-    i2 = i2 > nf - 2 ? nf - 2 : i2;
-    float w1[4], dw1[4], w2[4], dw2[4];
-    catmull_rom(x1 - float(i1), w1, dw1);
-    catmull_rom(x2 - float(i2), w2, dw2);
-    OpSample r;
+    return eval_at(k, 0.f, f1, f2, true);
+  }
+
+  /// `g(f1, f2; d)` with `∂g/∂f1`, `∂g/∂f2` (linear in d between slices). The two slices'
+  /// 4 × 4 stencils are blended in `d` first, then one bicubic is evaluated (the same
+  /// interpolant: both steps are linear in the samples). Stencils are read from `padded` when
+  /// set, else directly when all 16 nodes are on the grid, else through `ghost`.
+  ISOKIT_HOSTDEV OpSample eval(float f1, float f2, float d) const {
+    int k = 0;
+    float w = 0.f;
+    locate_d(d, k, w);
+    return eval_at(k, w, f1, f2, true);
+  }
+
+  /// `eval` with every stencil value read through `ghost` (the edge path everywhere): the same
+  /// result bit for bit; kept as the reference for tests.
+  ISOKIT_HOSTDEV OpSample eval_ghosted(float f1, float f2, float d) const {
+    int k = 0;
+    float w = 0.f;
+    locate_d(d, k, w);
+    return eval_at(k, w, f1, f2, false);
+  }
+
+  /// Bicubic of the stencil rows `p + a * stride` (a = 0..3, along f1; 4 values each, along
+  /// f2), blended with weight `w` towards the rows `slice` floats further (not read when
+  /// `w == 0`); `s = nf - 1` scales the derivatives. Sums run along f1 first, then along f2.
+  static ISOKIT_HOSTDEV OpSample bicubic(const float* p, std::ptrdiff_t stride, std::ptrdiff_t slice, float w,
+                                         float t1, float t2, float s) {
+#if defined(ISOKIT_GRID_OPERATOR_SSE2)
+    __m128 w1, dw1, w2, dw2;
+    catmull_rom4(t1, w1, dw1);
+    catmull_rom4(t2, w2, dw2);
+    __m128 row[4];
     for (int a = 0; a < 4; ++a) {
-      float row = 0.f, drow = 0.f;
-      for (int b = 0; b < 4; ++b) {
-        const float v = ghost(k, i1 - 1 + a, i2 - 1 + b);
-        row += w2[b] * v;
-        drow += dw2[b] * v;
-      }
-      r.g += w1[a] * row;
-      r.dg1 += dw1[a] * row;
-      r.dg2 += w1[a] * drow;
+      const __m128 x = _mm_loadu_ps(p + a * stride);
+      row[a] = w == 0.f ? x
+                        : _mm_add_ps(x, _mm_mul_ps(_mm_set1_ps(w),
+                                                   _mm_sub_ps(_mm_loadu_ps(p + slice + a * stride), x)));
     }
-    r.dg1 *= s;
-    r.dg2 *= s;
+    __m128 c = _mm_mul_ps(_mm_shuffle_ps(w1, w1, 0x00), row[0]);
+    __m128 e = _mm_mul_ps(_mm_shuffle_ps(dw1, dw1, 0x00), row[0]);
+    c = _mm_add_ps(c, _mm_mul_ps(_mm_shuffle_ps(w1, w1, 0x55), row[1]));
+    e = _mm_add_ps(e, _mm_mul_ps(_mm_shuffle_ps(dw1, dw1, 0x55), row[1]));
+    c = _mm_add_ps(c, _mm_mul_ps(_mm_shuffle_ps(w1, w1, 0xaa), row[2]));
+    e = _mm_add_ps(e, _mm_mul_ps(_mm_shuffle_ps(dw1, dw1, 0xaa), row[2]));
+    c = _mm_add_ps(c, _mm_mul_ps(_mm_shuffle_ps(w1, w1, 0xff), row[3]));
+    e = _mm_add_ps(e, _mm_mul_ps(_mm_shuffle_ps(dw1, dw1, 0xff), row[3]));
+    OpSample r;
+    r.g = sum4(_mm_mul_ps(w2, c));
+    r.dg1 = sum4(_mm_mul_ps(w2, e)) * s;
+    r.dg2 = sum4(_mm_mul_ps(dw2, c)) * s;
+    return r;
+#else
+    return bicubic_scalar(p, stride, slice, w, t1, t2, s);
+#endif
+  }
+
+  /// `bicubic` in plain scalar code (the device code; `bicubic` gives the same bits on every
+  /// host).
+  static ISOKIT_HOSTDEV OpSample bicubic_scalar(const float* p, std::ptrdiff_t stride, std::ptrdiff_t slice,
+                                                float w, float t1, float t2, float s) {
+    float w1[4], dw1[4], w2[4], dw2[4];
+    catmull_rom(t1, w1, dw1);
+    catmull_rom(t2, w2, dw2);
+    float v[16];  // v[4 a + b]
+    for (int a = 0; a < 4; ++a)
+      for (int b = 0; b < 4; ++b) {
+        const float x = p[a * stride + b];
+        v[4 * a + b] = w == 0.f ? x : x + w * (p[slice + a * stride + b] - x);
+      }
+    float c[4], e[4];
+    for (int b = 0; b < 4; ++b) {
+      c[b] = w1[0] * v[b] + w1[1] * v[4 + b] + w1[2] * v[8 + b] + w1[3] * v[12 + b];
+      e[b] = dw1[0] * v[b] + dw1[1] * v[4 + b] + dw1[2] * v[8 + b] + dw1[3] * v[12 + b];
+    }
+    OpSample r;
+    r.g = w2[0] * c[0] + w2[1] * c[1] + w2[2] * c[2] + w2[3] * c[3];
+    r.dg1 = (w2[0] * e[0] + w2[1] * e[1] + w2[2] * e[2] + w2[3] * e[3]) * s;
+    r.dg2 = (dw2[0] * c[0] + dw2[1] * c[1] + dw2[2] * c[2] + dw2[3] * c[3]) * s;
     return r;
   }
 
-  /// `g(f1, f2; d)` with `∂g/∂f1`, `∂g/∂f2` (linear in d between slices).
-  ISOKIT_HOSTDEV OpSample eval(float f1, float f2, float d) const {
-    if (nd == 1) return eval_slice(0, f1, f2);
+ private:
+#if defined(ISOKIT_GRID_OPERATOR_SSE2)
+  /// ((x0 + x1) + x2) + x3, the scalar code's order.
+  static float sum4(__m128 x) {
+    alignas(16) float v[4];
+    _mm_store_ps(v, x);
+    return ((v[0] + v[1]) + v[2]) + v[3];
+  }
+  /// `catmull_rom`, the four weights in one register each (the same operations per lane).
+  static void catmull_rom4(float t, __m128& w, __m128& dw) {
+    const __m128 x = _mm_set1_ps(t);
+    w = _mm_mul_ps(x, _mm_setr_ps(-0.5f, 1.5f, -1.5f, 0.5f));
+    w = _mm_mul_ps(_mm_add_ps(w, _mm_setr_ps(1.f, -2.5f, 2.f, -0.5f)), x);
+    w = _mm_mul_ps(_mm_add_ps(w, _mm_setr_ps(-0.5f, 0.f, 0.5f, 0.f)), x);
+    w = _mm_add_ps(w, _mm_setr_ps(0.f, 1.f, 0.f, 0.f));
+    dw = _mm_mul_ps(x, _mm_setr_ps(-1.5f, 4.5f, -4.5f, 1.5f));
+    dw = _mm_mul_ps(_mm_add_ps(dw, _mm_setr_ps(2.f, -5.f, 4.f, -1.f)), x);
+    dw = _mm_add_ps(dw, _mm_setr_ps(-0.5f, 0.f, 0.5f, 0.f));
+  }
+#endif
+  ISOKIT_HOSTDEV void locate_d(float d, int& k, float& w) const {
+    if (nd == 1) return;
     d = d < 0.f ? 0.f : (d > 1.f ? 1.f : d);
     const float z = d * float(nd - 1);
-    int k = int(z);
+    k = int(z);
     k = k > nd - 2 ? nd - 2 : k;
-    const float w = z - float(k);
-    const OpSample a = eval_slice(k, f1, f2);
-    if (w == 0.f) return a;
-    const OpSample b = eval_slice(k + 1, f1, f2);
-    return OpSample{a.g + w * (b.g - a.g), a.dg1 + w * (b.dg1 - a.dg1), a.dg2 + w * (b.dg2 - a.dg2)};
+    w = z - float(k);
+  }
+
+  /// Slices k and k + 1 blended with weight `w` (slice k + 1 is not read when w == 0).
+  ISOKIT_HOSTDEV OpSample eval_at(int k, float w, float f1, float f2, bool direct) const {
+    int i1 = 0, i2 = 0;
+    float t1 = 0.f, t2 = 0.f;
+    locate(f1, i1, t1);
+    locate(f2, i2, t2);
+    const float s = float(nf - 1);
+    if (direct && padded) {
+      const std::ptrdiff_t n = nf + 2;
+      return bicubic(padded + (k * n + i1) * n + i2, n, n * n, w, t1, t2, s);
+    }
+    if (direct && i1 >= 1 && i2 >= 1 && i1 <= nf - 3 && i2 <= nf - 3) {
+      const std::ptrdiff_t n = nf;
+      return bicubic(data + (k * n + i1 - 1) * n + i2 - 1, n, n * n, w, t1, t2, s);
+    }
+    float v[16];  // the stencil, blended in d
+    for (int a = 0; a < 4; ++a)
+      for (int b = 0; b < 4; ++b) {
+        const float x = ghost(k, i1 - 1 + a, i2 - 1 + b);
+        v[4 * a + b] = w == 0.f ? x : x + w * (ghost(k + 1, i1 - 1 + a, i2 - 1 + b) - x);
+      }
+    return bicubic(v, 4, 0, 0.f, t1, t2, s);
   }
 };
 
