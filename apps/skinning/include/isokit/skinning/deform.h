@@ -1,0 +1,35 @@
+// SPDX-License-Identifier: MIT
+/// \file
+/// Geometric skinning: linear blend skinning (LBS) and dual-quaternion skinning (DQS, Kavan et
+/// al. 2008), the baselines and the initial/rotation sources of the implicit methods. Skinning
+/// matrices come from `skinning_matrices(rig, pose)`; DQS uses their rigid part (rotation from
+/// the polar decomposition, see `rigid_part`), LBS the full affine matrices.
+#pragma once
+
+#include <vector>
+
+#include "isokit/core/math.h"
+#include "isokit/skinning/rig.h"
+#include "isokit/track/mesh.h"
+
+namespace isokit::skinning {
+
+/// The rigid part of an affine matrix: the rotation of its polar decomposition (SVD, det +1)
+/// and its translation.
+Affine rigid_part(const Affine& a);
+
+/// `out[v] = Σ w_vj M_j rest[v]`. `out` is resized. \throw InputError for size mismatches.
+void linear_blend(const SkinWeights& weights, const std::vector<Affine>& skin, const track::Positions& rest,
+                  track::Positions& out, std::size_t grain = 1024);
+
+/// Dual-quaternion blending of the rigid parts of `skin` (antipodality fixed against each
+/// vertex's largest-weight joint). `rotations`, when not null, receives each vertex's blended
+/// rotation (the 2014 tracker's target rotations R_i, §5.1).
+void dual_quaternion_blend(const SkinWeights& weights, const std::vector<Affine>& skin,
+                           const track::Positions& rest, track::Positions& out, std::vector<Mat3f>* rotations,
+                           std::size_t grain = 1024);
+
+/// Largest rotation angle (radians) of `rigid_part(a)` for each matrix.
+double rotation_angle(const Affine& a);
+
+}  // namespace isokit::skinning

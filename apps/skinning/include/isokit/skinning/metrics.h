@@ -1,0 +1,134 @@
+// SPDX-License-Identifier: MIT
+/// \file
+/// Geometric skin-quality metrics of docs/QUALITY.md: self-intersections (exact predicates),
+/// enclosed volume, edge distortion, displacement. The field-based metrics (inverted triangles,
+/// iso residual, contact vertices) need the implicit field and are computed by the pipeline;
+/// `FrameMetrics` has slots for them so that one struct carries a frame's numbers.
+///
+/// Meshes are plain arrays: `#V by 3` positions, `#F by 3` vertex indices (counter-clockwise seen
+/// from outside). Every function throws `isokit::InputError` for an index out of range or
+/// mismatched vertex counts, naming the item.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <limits>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "isokit/track/mesh.h"
+
+namespace isokit::skinning {
+
+/// What `count_self_intersections` found besides the count.
+struct SelfIntersectionDetails {
+  /// Intersecting pairs `{f, g}` with `f < g`, in lexicographic order; at most `max_pairs`.
+  std::vector<std::array<int, 2>> pairs;
+  /// Degenerate triangles (three collinear corners, repeated indices included), ascending; at
+  /// most `max_pairs`. They take no part in the pair tests.
+  std::vector<int> degenerate_faces;
+  int degenerate_count{0};       ///< all degenerate triangles (not capped)
+  long long candidate_pairs{0};  ///< pairs whose bounding boxes overlap (broad phase)
+};
+
+struct SelfIntersectionOptions {
+  int max_pairs{1000};  ///< cap on the lists in `SelfIntersectionDetails`
+  /// Triangles per parallel task (space is cut into slabs of about this many); 0 = one serial
+  /// pass. The result does not depend on it.
+  std::size_t grain{16384};
+};
+
+/// Number of pairs of distinct, non-degenerate triangles that intersect beyond what they share
+/// (CGAL `Polygon_mesh_processing::self_intersections` semantics, exact predicates):
+/// - no shared vertex: counted if the closed triangles intersect at all (touching counts);
+/// - one shared vertex: counted if they meet anywhere other than that vertex;
+/// - two shared vertices (an edge): counted if they are coplanar and lie on the same side of it
+///   (folded over each other);
+/// - three shared vertices (a duplicated triangle, either orientation): counted.
+/// Sharing is by vertex *index*: weld coincident vertices first. Degenerate triangles are left
+/// out and reported in `details` (CGAL reports each as a pair `(f, f)`; its output size is
+/// `count + degenerate_count`).
+/// \throw InputError naming the triangle or vertex for an index out of range or a non-finite
+/// coordinate.
+int count_self_intersections(const track::Positions& positions, const track::Triangles& triangles,
+                             SelfIntersectionDetails* details = nullptr,
+                             const SelfIntersectionOptions& options = {});
+
+/// Signed enclosed volume by the divergence theorem, `Σ_f (p0 · (p1 × p2)) / 6` with corners taken
+/// relative to the bounding-box centre, in double. Positive for a closed mesh with outward
+/// (counter-clockwise) triangles, negative when flipped; meaningful for closed meshes only.
+double enclosed_volume(const track::Positions& positions, const track::Triangles& triangles);
+
+struct EdgeDistortion {
+  double mean{0};  ///< mean of `|len / len_rest - 1|` over unique undirected edges
+  double max{0};
+  std::array<int, 2> worst_edge{-1, -1};  ///< vertices of the edge reaching `max`
+  int edges{0};                           ///< unique edges measured
+  int zero_rest_edges{0};                 ///< edges of zero rest length, skipped
+};
+
+/// Length distortion of the unique edges of `triangles` from `rest` to `posed`.
+EdgeDistortion edge_distortion(const track::Positions& rest, const track::Positions& posed,
+                               const track::Triangles& triangles);
+
+/// Largest vertex distance `max_i |a_i - b_i|` (0 for empty arrays).
+double max_displacement(const track::Positions& a, const track::Positions& b);
+
+/// Axis-aligned bounding box of the positions (an empty box for no vertices).
+Eigen::AlignedBox3d bounding_box(const track::Positions& positions);
+
+/// Length of the bounding-box diagonal (0 for fewer than two distinct points).
+double bbox_diagonal(const track::Positions& positions);
+
+/// One frame's numbers (docs/QUALITY.md). Integer fields are -1 and doubles NaN when not computed.
+struct FrameMetrics {
+  static constexpr double kNotComputed = std::numeric_limits<double>::quiet_NaN();
+
+  int self_intersections{-1};
+  int degenerate_faces{-1};
+  double volume{kNotComputed};
+  double volume_ratio{kNotComputed};  ///< volume / rest volume
+  double edge_distortion_mean{kNotComputed};
+  double edge_distortion_max{kNotComputed};
+  double max_displacement{kNotComputed};  ///< from the rest positions
+  double rest_distance{kNotComputed};     ///< max_displacement / rest bounding-box diagonal
+  // Field-based, filled by the pipeline:
+  int inverted_triangles{-1};
+  /// Inverted triangles that were not inverted at the rest pose (in concave regions the
+  /// composed field can disagree with the rest mesh already; docs/skinning.md "metrics").
+  int new_inverted_triangles{-1};
+  double iso_residual_max{kNotComputed};
+  double iso_residual_mean{kNotComputed};
+  int contact_vertices{-1};
+};
+
+/// Worst of two frames, field by field (largest counts and errors, volume ratio farthest from 1;
+/// a field not computed in one frame takes the other's value).
+FrameMetrics worst_of(const FrameMetrics& a, const FrameMetrics& b);
+
+/// Computes the geometric fields of `FrameMetrics` for many poses of one mesh: the constructor
+/// stores the rest positions, the unique edges and their rest lengths and the rest volume.
+class FrameMetricsEvaluator {
+ public:
+  /// \throw InputError for an index out of range.
+  FrameMetricsEvaluator(track::Positions rest, track::Triangles triangles,
+                        SelfIntersectionOptions options = {});
+
+  /// \throw InputError if `posed` has a different vertex count from the rest mesh.
+  FrameMetrics evaluate(const track::Positions& posed) const;
+
+  double rest_volume() const { return rest_volume_; }
+  double rest_diagonal() const { return rest_diagonal_; }
+
+ private:
+  track::Positions rest_;
+  track::Triangles triangles_;
+  SelfIntersectionOptions options_;
+  std::vector<std::array<int, 2>> edges_;
+  std::vector<double> rest_lengths_;
+  double rest_volume_{0};
+  double rest_diagonal_{0};
+};
+
+}  // namespace isokit::skinning

@@ -1,0 +1,97 @@
+// SPDX-License-Identifier: MIT
+/// \file
+/// The skinning pipeline: a rig (with weights, or heat weights computed on load), its fitted
+/// implicit skin, and the four methods compared on the same animation:
+/// - `lbs`: linear blend skinning;
+/// - `dqs`: dual-quaternion skinning (Kavan et al. 2008);
+/// - `implicit2013`: DQS, then the 2013 projector on the 2013 tree (Implicit Skinning §5);
+/// - `tracking2014`: incremental tracking on the 2014 tree (2014 §5): each vertex moved by its
+///   partition joint's rigid delta, Newton projection, tangential ARAP relaxation with
+///   DQS-blended target rotations, contact smoothing; animation steps split by sub-stepping.
+/// Every method's frames are measured with the same field (the 2014 tree) and the same
+/// geometric metrics (metrics.h, docs/QUALITY.md).
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "isokit/skinning/animation.h"
+#include "isokit/skinning/implicit_skin.h"
+#include "isokit/skinning/metrics.h"
+#include "isokit/skinning/rig.h"
+#include "isokit/skinning/setup.h"
+
+namespace isokit::skinning {
+
+/// A rig from `procedural:<spec>` (procedural.h) or a file (rig_io.h, clips sampled at `fps`);
+/// heat-diffusion weights (weights.h) are computed when it has none.
+/// \throw InputError naming the file / spec and the item.
+Rig open_rig(const std::string& spec, double fps = 30, const Progress& progress = {});
+
+enum class Method { kLbs, kDqs, kImplicit2013, kTracking2014 };
+
+const char* to_string(Method m);
+/// \throw InputError listing the methods for an unknown name.
+Method method_from_string(const std::string& s);
+std::vector<Method> all_methods();
+
+struct FrameStats {
+  double ms{0};          ///< deformation time of the frame (all sub-steps; no metrics)
+  int substeps{1};       ///< tracking2014 sub-steps (2014 §5.2)
+  int iterations{0};     ///< tracker iterations (sum over sub-steps) or projector steps
+  int lost_vertices{0};  ///< vertices without a usable gradient (left in place by the tracker)
+  FrameMetrics metrics;  ///< all quality metrics (field ones with the 2014 tree)
+};
+
+struct BakeResult {
+  Method method{Method::kDqs};
+  std::vector<track::Positions> frames;  ///< welded positions per frame
+  std::vector<FrameStats> stats;
+  FrameMetrics worst;        ///< worst over frames
+  double rest_recovery{-1};  ///< last frame vs rest / bbox diagonal, when the last pose is the rest pose
+  double mean_ms{0};
+  double vertex_iterations_per_second{0};
+};
+
+struct BakeOptions {
+  bool metrics{true};
+  bool self_intersections{true};  ///< exact count per frame (the slowest metric)
+  std::size_t grain{1024};        ///< parallel grain (0 = serial, same results)
+};
+
+class Skinner {
+ public:
+  /// Validates the rig, computes heat weights when it has none, partitions and fits (progress
+  /// on `progress`). \throw InputError naming the rig and the item.
+  Skinner(Rig rig, SkinSetup setup = {}, Progress progress = {});
+  ~Skinner();
+
+  const Rig& rig() const { return rig_; }
+  const SkinSetup& setup() const { return setup_; }
+  const FittedRig& fitted() const { return *fitted_; }
+  /// The composed field of a tree kind (built on first use).
+  SkinField& field(TreeKind kind);
+
+  /// Runs `method` over `poses` (local joint transforms per frame). The tracking starts from the
+  /// rest mesh at the rest pose and sub-steps into the first frame.
+  BakeResult bake(Method method, const std::vector<Pose>& poses, const BakeOptions& options = {});
+
+  /// Quality metrics of positions at a pose (field metrics with the 2014 tree).
+  /// `contact`, when given, marks vertices excluded from the iso residual (besides the field's
+  /// own contact flags).
+  FrameMetrics measure(const Pose& pose, const track::Positions& positions, bool self_intersections,
+                       const std::vector<std::uint8_t>* contact = nullptr);
+
+ private:
+  Rig rig_;
+  SkinSetup setup_;
+  Progress progress_;
+  std::unique_ptr<FittedRig> fitted_;
+  std::unique_ptr<SkinField> field2013_, field2014_, metrics_field_;
+  std::unique_ptr<FrameMetricsEvaluator> evaluator_;
+  std::vector<float> iso2014_;
+  std::vector<std::uint8_t> rest_inverted_;  ///< triangles already inverted w.r.t. the field at rest
+};
+
+}  // namespace isokit::skinning

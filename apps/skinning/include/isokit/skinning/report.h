@@ -1,0 +1,35 @@
+// SPDX-License-Identifier: MIT
+/// \file
+/// Reports of bakes: the `--metrics` JSON (QUALITY.md metrics per frame, worst values, timings)
+/// and the plain-text comparison table `isokit-skin demo` prints.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "isokit/skinning/pipeline.h"
+
+namespace isokit::skinning {
+
+struct ReportContext {
+  std::string animation;  ///< e.g. "--bend LeftForeArm:x:150 (31 frames)"
+  double fps{30};
+  int threads{0};         ///< 0: unknown
+  double fit_seconds{0};  ///< preprocessing: fit of all primitives
+};
+
+/// The metrics JSON: `{rig, vertices, triangles, joints, animation, fps, threads, fit_seconds,
+/// methods: {name: {mean_ms, ratio_to_dqs, vertex_iterations_per_second, rest_recovery, worst,
+/// frames: [...]}}}`. Values not computed are `null`.
+std::string metrics_json(const Rig& rig, const std::vector<BakeResult>& results,
+                         const ReportContext& context);
+
+/// One line per method: self-intersections, inverted triangles, iso residual, edge distortion,
+/// volume ratio, rest recovery, ms/frame, ratio to DQS (worst values over the animation).
+std::string comparison_table(const std::vector<BakeResult>& results);
+
+/// Writes `text` to `path` through a temporary file (no half-written file).
+/// \throw InputError naming the path when it cannot be written.
+void write_text_file(const std::string& path, const std::string& text);
+
+}  // namespace isokit::skinning

@@ -1,0 +1,94 @@
+// SPDX-License-Identifier: MIT
+/// \file
+/// Rig files: `load_rig` reads a skinned character (glTF 2.0 .gltf/.glb, FBX, COLLADA .dae) through
+/// assimp; `save_rig` writes a rig as glTF 2.0 (own writer) that `load_rig` reads back with the
+/// same skinning; `write_baked_glb` writes a baked deformation (one morph target per frame) that
+/// any glTF viewer plays; `write_ply` writes one posed mesh. Format details and limits:
+/// docs/skinning-io.md.
+///
+/// Loading, in short: every skinned mesh (each glTF primitive is one) is merged into one mesh;
+/// vertices with equal positions are welded for the deformation and `Rig::output` maps the
+/// file's vertices back; all weight sets are read (any number of influences, JOINTS_1/WEIGHTS_1…
+/// included); joints are the skin's joints plus the nodes that connect them, parents first, with
+/// the bind pose (from the inverse bind matrices) as rest pose; clips are sampled at
+/// `LoadOptions::fps` (linear / slerp). The mesh node's own transform is ignored for skinned
+/// meshes (glTF rule, applied to every format): the skinned mesh lies in scene space.
+///
+/// Writers write a temporary file next to `path` and rename it: no half-written file is left.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "isokit/skinning/rig.h"
+#include "isokit/track/mesh.h"
+
+namespace isokit::skinning {
+
+struct LoadOptions {
+  double fps{30};  ///< clip sampling rate (frames per second), > 0
+  /// Welding distance relative to the bounding-box diagonal; 0 = exact position equality.
+  double weld_tolerance{0};
+  /// Load only skinned meshes whose mesh or node name equals this (empty: all of them).
+  std::string mesh;
+  bool clips{true};            ///< false: skip the animations
+  bool ignore_weights{false};  ///< true: load with empty weights (the pipeline computes heat weights)
+  float min_weight{0.0f};      ///< drop influences below this fraction of a vertex's total weight
+};
+
+/// What `load_rig` found (for the CLI's summary); `warnings` lists everything it changed or
+/// skipped (unskinned meshes, welded vertices with different weights, node pose ≠ bind pose…).
+struct LoadReport {
+  std::string format;        ///< assimp's importer extension ("gltf", "glb", "fbx", "dae")
+  int meshes{0};             ///< source meshes (glTF primitives) merged
+  int file_vertices{0};      ///< output (unwelded) vertices kept
+  int welded_vertices{0};    ///< `Rig::rest.rows()`
+  int max_influences{0};     ///< most influences on one vertex (after `min_weight`)
+  int dropped_triangles{0};  ///< triangles degenerate after welding (kept in the output mesh)
+  bool weights_from_file{false};
+  std::vector<std::string> warnings;
+};
+
+/// Reads a rigged mesh. Files with meshes and a skeleton but no skin weights load with empty
+/// weights (glTF: a skin without JOINTS_0; other formats: unweighted bone nodes).
+/// \throw InputError naming the file, the item and the fix: missing or unreadable file
+/// (assimp's message included), malformed glTF container or JSON, no skinned mesh ("no skin"),
+/// non-finite values, weights naming missing joints, zero-weight vertices, shear in a rest
+/// transform, inconsistent bind poses between meshes.
+Rig load_rig(const std::string& path, const LoadOptions& options = {}, LoadReport* report = nullptr);
+
+/// Writes `rig` as glTF 2.0: `.glb` (binary) or `.gltf` (JSON with an embedded base64 buffer).
+/// Output vertices (`Rig::output`), one primitive per source primitive, normals, JOINTS_n /
+/// WEIGHTS_n sets of 4 (as many as the largest vertex needs), inverse bind matrices, the joint
+/// hierarchy (rest_local as TRS) and the clips as LINEAR animations at each clip's fps.
+/// \throw InputError for an invalid rig (`validate`), duplicate or empty joint names, another
+/// extension, or an unwritable path.
+void save_rig(const Rig& rig, const std::string& path);
+
+enum class MorphInterpolation { kLinear, kStep };
+
+struct BakedGlbOptions {
+  bool normals{true};  ///< per-frame vertex normals as NORMAL morph deltas
+  MorphInterpolation interpolation{MorphInterpolation::kLinear};
+  bool sparse{true};  ///< sparse delta accessors for frames where few vertices move
+  /// Deltas shorter than this fraction of the bbox diagonal count as zero (sparse only).
+  double sparse_epsilon{0};
+  std::string clip_name{"baked"};
+  std::uint64_t max_bytes{std::uint64_t{1} << 31};  ///< refuse larger files (GLB's own cap: 4 GiB)
+};
+
+/// Writes a baked deformation as a `.glb`: the rest mesh (`Rig::output` vertices at `rig.rest`),
+/// one morph target per frame (position deltas of frame k; plus normal deltas) and an animation
+/// of the morph weights, one-hot at frame k at time k / fps. `frames[k]` holds the welded
+/// positions of frame k (`#V by 3`, V = `rig.rest.rows()`).
+/// \throw InputError for empty or mis-sized frames, non-finite positions, fps ≤ 0, a file over
+/// `max_bytes`, a path not ending in .glb, or an unwritable path.
+void write_baked_glb(const Rig& rig, const std::vector<track::Positions>& frames, double fps,
+                     const std::string& path, const BakedGlbOptions& options = {});
+
+/// Binary little-endian PLY (float x y z; uchar-count int vertex_indices).
+/// \throw InputError for a triangle index out of range or an unwritable path.
+void write_ply(const std::string& path, const track::Positions& positions, const track::Triangles& triangles);
+
+}  // namespace isokit::skinning

@@ -1,0 +1,430 @@
+// SPDX-License-Identifier: MIT
+#include "isokit/skinning/implicit_skin.h"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <map>
+#include <mutex>
+#include <numeric>
+
+#include "isokit/core/error.h"
+#include "isokit/implicit/skeleton.h"
+#include "isokit/operators/biharmonic.h"
+#include "isokit/operators/controller.h"
+#include "isokit/skinning/deform.h"
+#include "isokit/track/mesh.h"
+
+namespace isokit::skinning {
+
+namespace {
+
+Rigid3f to_rigid3f(const Affine& a) {
+  const Affine r = rigid_part(a);
+  Rigid3f x;
+  for (int i = 0; i < 3; ++i) {
+    for (int c = 0; c < 3; ++c) x.R.m[i * 3 + c] = static_cast<float>(r.linear()(i, c));
+  }
+  x.t = {static_cast<float>(r.translation().x()), static_cast<float>(r.translation().y()),
+         static_cast<float>(r.translation().z())};
+  return x;
+}
+
+Affine to_affine(const Rigid3d& x) {
+  Affine a = Affine::Identity();
+  for (int i = 0; i < 3; ++i)
+    for (int c = 0; c < 3; ++c) a.linear()(i, c) = x.R.m[i * 3 + c];
+  a.translation() = Eigen::Vector3d(x.t.x, x.t.y, x.t.z);
+  return a;
+}
+
+}  // namespace
+
+std::vector<int> clean_partition(const std::vector<int>& labels, const track::Triangles& triangles,
+                                 int num_vertices) {
+  const track::Adjacency adj = track::vertex_adjacency(triangles, num_vertices);
+  std::vector<int> out = labels;
+  for (int round = 0; round < 8; ++round) {
+    // Components of equal labels.
+    std::vector<int> comp(static_cast<std::size_t>(num_vertices), -1), size;
+    std::vector<int> stack;
+    for (int s = 0; s < num_vertices; ++s) {
+      if (comp[s] >= 0) continue;
+      const int id = static_cast<int>(size.size());
+      size.push_back(0);
+      comp[s] = id;
+      stack.push_back(s);
+      while (!stack.empty()) {
+        const int v = stack.back();
+        stack.pop_back();
+        ++size[id];
+        for (int k = adj.offsets[v]; k < adj.offsets[v + 1]; ++k) {
+          const int u = adj.neighbors[k];
+          if (comp[u] < 0 && out[u] == out[v]) {
+            comp[u] = id;
+            stack.push_back(u);
+          }
+        }
+      }
+    }
+    // Largest component per label.
+    std::map<int, int> best;  // label -> component
+    for (int v = 0; v < num_vertices; ++v) {
+      auto it = best.find(out[v]);
+      if (it == best.end() || size[comp[v]] > size[it->second]) best[out[v]] = comp[v];
+    }
+    // Reassign the others by majority of outside neighbours.
+    std::map<int, std::map<int, int>> votes;  // component -> label -> count
+    for (int v = 0; v < num_vertices; ++v) {
+      if (best[out[v]] == comp[v]) continue;
+      for (int k = adj.offsets[v]; k < adj.offsets[v + 1]; ++k) {
+        const int u = adj.neighbors[k];
+        if (comp[u] != comp[v]) ++votes[comp[v]][out[u]];
+      }
+    }
+    if (votes.empty()) break;
+    std::map<int, int> target;
+    for (const auto& [c, vs] : votes) {
+      int lab = -1, cnt = -1;
+      for (const auto& [l, n] : vs)
+        if (n > cnt) {
+          lab = l;
+          cnt = n;
+        }
+      target[c] = lab;
+    }
+    bool changed = false;
+    for (int v = 0; v < num_vertices; ++v) {
+      auto it = target.find(comp[v]);
+      if (it != target.end() && out[v] != it->second) {
+        out[v] = it->second;
+        changed = true;
+      }
+    }
+    if (!changed) break;
+  }
+  return out;
+}
+
+FittedRig::FittedRig(const Rig& rig, const SkinSetup& setup, const Progress& progress)
+    : rig_(std::make_shared<const Rig>(rig)) {
+  const Rig& r = *rig_;
+  require(!r.weights.empty(), r.name + ": weights", "the rig has no skin weights",
+          "compute heat weights first (isokit-skin does when a file has none)");
+  const int nv = static_cast<int>(r.rest.rows());
+  const int nj = static_cast<int>(r.joints.size());
+  partition_ = clean_partition(dominant_joint(r.weights, nv), r.triangles, nv);
+  const std::vector<Eigen::Vector3d> jp = rest_joint_positions(r);
+
+  bones_.resize(static_cast<std::size_t>(nj));
+  std::vector<char> refit(static_cast<std::size_t>(nj), 0);
+  const auto t0 = std::chrono::steady_clock::now();
+  // Pass 0 fits every joint; pass 1 merges the vertices of joints whose fit failed into a
+  // fitted neighbour (the parent, else the child with most vertices) and refits those
+  // neighbours with a segment covering all their vertices.
+  for (int pass = 0; pass < 2; ++pass) {
+    if (pass == 1) {
+      std::vector<int> target(static_cast<std::size_t>(nj), -1);
+      for (int j = 0; j < nj; ++j) {
+        if (bones_[j].fitted || bones_[j].vertices == 0) continue;
+        int t = r.joints[j].parent;
+        if (t < 0 || !bones_[t].fitted) {
+          t = -1;
+          for (int c = 0; c < nj; ++c)
+            if (r.joints[c].parent == j && bones_[c].fitted &&
+                (t < 0 || bones_[c].vertices > bones_[t].vertices))
+              t = c;
+        }
+        if (t < 0) continue;
+        target[j] = t;
+        refit[t] = 1;
+      }
+      bool any = false;
+      for (int v = 0; v < nv; ++v)
+        if (target[partition_[v]] >= 0) {
+          partition_[v] = target[partition_[v]];
+          any = true;
+        }
+      if (!any) break;
+      for (int j = 0; j < nj; ++j)
+        if (target[j] >= 0) {
+          bones_[j].vertices = 0;
+          bones_[j].error += " (its vertices were merged into '" + r.joints[target[j]].name + "')";
+        }
+    }
+    // Triangles per joint: a triangle belongs to the joint of at least two of its vertices
+    // (else to its first vertex's joint).
+    std::vector<std::vector<int>> tris(static_cast<std::size_t>(nj));
+    for (Eigen::Index f = 0; f < r.triangles.rows(); ++f) {
+      const int a = partition_[r.triangles(f, 0)], b = partition_[r.triangles(f, 1)],
+                c = partition_[r.triangles(f, 2)];
+      const int j = (b == c) ? b : a;
+      tris[static_cast<std::size_t>(j)].push_back(static_cast<int>(f));
+    }
+    std::vector<int> count(static_cast<std::size_t>(nj), 0);
+    for (int v = 0; v < nv; ++v) ++count[partition_[v]];
+    std::vector<std::vector<int>> children(static_cast<std::size_t>(nj));
+    for (int j = 0; j < nj; ++j)
+      if (r.joints[j].parent >= 0) children[r.joints[j].parent].push_back(j);
+
+    // Nearest ancestor with vertices (for closure at the start).
+    auto ancestor_with_vertices = [&](int j) {
+      int p = r.joints[j].parent;
+      while (p >= 0 && count[p] == 0) p = r.joints[p].parent;
+      return p;
+    };
+
+    int done = 0;
+    for (int j = 0; j < nj; ++j) {
+      if (pass == 1 && !refit[j]) continue;
+      BonePart& b = bones_[j];
+      b.fitted = false;
+      b.error.clear();
+      b.joint = j;
+      b.vertices = count[j];
+      const std::string name = r.name + ": joint '" + r.joints[j].name + "'";
+      if (count[j] == 0) {
+        b.error = "no vertices";
+        continue;
+      }
+      implicit::MeshPart part;
+      part.name = name;
+      std::vector<int> local(static_cast<std::size_t>(nv), -1);
+      for (int f : tris[j]) {
+        std::array<int, 3> t{};
+        for (int k = 0; k < 3; ++k) {
+          const int v = r.triangles(f, k);
+          if (local[v] < 0) {
+            local[v] = static_cast<int>(part.vertices.size());
+            part.vertices.push_back({r.rest(v, 0), r.rest(v, 1), r.rest(v, 2)});
+          }
+          t[static_cast<std::size_t>(k)] = local[v];
+        }
+        part.triangles.push_back(t);
+      }
+      if (part.triangles.empty()) {
+        b.error = "no triangles";
+        continue;
+      }
+      Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+      for (const Vec3d& p : part.vertices) centroid += Eigen::Vector3d(p.x, p.y, p.z);
+      centroid /= double(part.vertices.size());
+      const Eigen::Vector3d start = jp[j];
+      const bool has_parent_part = ancestor_with_vertices(j) >= 0;
+      implicit::PartFitOptions o = setup.fit;
+      o.close_start = has_parent_part;
+      double extent = 0;
+      for (const Vec3d& p : part.vertices)
+        extent = std::max(extent, (Eigen::Vector3d(p.x, p.y, p.z) - start).norm());
+      Eigen::Vector3d seg0 = start, seg1;
+      if (!refit[j] && children[j].size() == 1 && (jp[children[j][0]] - start).norm() > 1e-3 * extent) {
+        seg1 = jp[children[j][0]];
+        o.close_end = count[children[j][0]] > 0;
+      } else {
+        Eigen::Vector3d dir = centroid - start;
+        if (dir.norm() < 0.1 * extent || !has_parent_part) {
+          // Principal axis of the vertices, oriented away from the parent.
+          Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+          for (const Vec3d& p : part.vertices) {
+            const Eigen::Vector3d d = Eigen::Vector3d(p.x, p.y, p.z) - centroid;
+            cov += d * d.transpose();
+          }
+          Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(cov);
+          dir = es.eigenvectors().col(2);
+          if (r.joints[j].parent >= 0 && dir.dot(start - jp[r.joints[j].parent]) < 0) dir = -dir;
+        }
+        dir.normalize();
+        double lo = 0, hi = 0;
+        for (const Vec3d& p : part.vertices) {
+          const double u = (Eigen::Vector3d(p.x, p.y, p.z) - start).dot(dir);
+          lo = std::min(lo, u);
+          hi = std::max(hi, u);
+        }
+        // Grow the segment so that the culling planes (at cull_h of its length) cut no vertex at
+        // an end without a joint.
+        const double margin = 2.0 * o.cull_h / (1.0 - 2.0 * o.cull_h) * (hi - lo) + 1e-6 * extent;
+        // Vertices well behind the joint (a root, or hips around their joint): no joint end.
+        if (!has_parent_part || lo < -0.25 * (hi - lo)) o.close_start = false;
+        if (!o.close_start) seg0 = start + dir * (lo - margin);
+        seg1 = start + dir * (hi + margin);
+        o.close_end = false;
+      }
+      part.bone_start = {seg0.x(), seg0.y(), seg0.z()};
+      part.bone_end = {seg1.x(), seg1.y(), seg1.z()};
+      b.start = seg0;
+      b.end = seg1;
+      // Heat weights have no visibility term, so a partition may hold patches of a neighbouring
+      // surface facing the bone (armpit, crotch); an HRBF through them has spurious far-field
+      // inside regions. Triangles facing the bone are dropped, more strictly on each retry, and
+      // the last try also drops the closure points (docs/skinning.md, "fitting").
+      const Eigen::Vector3d axis = seg1 - seg0;
+      auto facing = [&](const std::array<int, 3>& t) {
+        Eigen::Vector3d q[3];
+        for (int k = 0; k < 3; ++k) {
+          const Vec3d& v = part.vertices[static_cast<std::size_t>(t[static_cast<std::size_t>(k)])];
+          q[k] = Eigen::Vector3d(v.x, v.y, v.z);
+        }
+        const Eigen::Vector3d c = (q[0] + q[1] + q[2]) / 3.0, n = (q[1] - q[0]).cross(q[2] - q[0]);
+        const double u = std::clamp((c - seg0).dot(axis) / std::max(axis.squaredNorm(), 1e-300), 0.0, 1.0);
+        const Eigen::Vector3d radial = c - (seg0 + u * axis);
+        const double denom = n.norm() * radial.norm();
+        return denom > 0 ? n.dot(radial) / denom : 1.0;
+      };
+      const std::vector<std::array<int, 3>> all = part.triangles;
+      const double thresholds[] = {-0.2, 0.3, 0.3};
+      for (int attempt = 0; attempt < 3 && !b.fitted; ++attempt) {
+        part.triangles.clear();
+        for (const auto& t : all)
+          if (facing(t) > thresholds[attempt]) part.triangles.push_back(t);
+        implicit::PartFitOptions oa = o;
+        if (attempt == 2) oa.close_start = oa.close_end = false;
+        try {
+          b.fit = implicit::fit_part(part, oa);
+          b.fitted = true;
+          b.error.clear();
+        } catch (const InputError& e) {
+          if (attempt == 0) b.error = e.what();
+        }
+      }
+      if (progress) progress("fit", ++done, nj);
+    }
+  }
+  fit_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  require(
+      fitted_count() > 0, r.name,
+      "no joint could be fitted with a primitive", "check the mesh and weights (first error: " + [&] {
+        for (const BonePart& b : bones_)
+          if (!b.error.empty()) return b.error;
+        return std::string("none");
+      }() + ")");
+}
+
+int FittedRig::fitted_count() const {
+  int n = 0;
+  for (const BonePart& b : bones_) n += b.fitted ? 1 : 0;
+  return n;
+}
+
+namespace {
+
+std::shared_ptr<const operators::GridOperator> cached_operator(const std::string& preset, int res, int slices,
+                                                               const Progress& progress) {
+  static std::mutex m;
+  static std::map<std::string, std::shared_ptr<const operators::GridOperator>> cache;
+  const std::string key = preset + "/" + std::to_string(res) + "/" + std::to_string(slices);
+  std::lock_guard<std::mutex> lock(m);
+  auto it = cache.find(key);
+  if (it != cache.end()) return it->second;
+  operators::OperatorSpec spec = operators::preset_spec(preset, res);
+  spec.slices = slices;
+  operators::BiharmonicOptions bo;
+  if (progress) bo.progress = [&](int done, int total) { progress("operator " + preset, done, total); };
+  operators::BiharmonicOperatorGenerator gen(spec, bo);
+  auto op = std::make_shared<const operators::GridOperator>(gen.generate());
+  cache[key] = op;
+  return op;
+}
+
+}  // namespace
+
+SkinField::SkinField(const FittedRig& fitted, const SkinSetup& setup, TreeKind tree, const Progress& progress)
+    : fitted_(&fitted), kind_(tree == TreeKind::kAuto ? TreeKind::k2014 : tree) {
+  const Rig& r = fitted.rig();
+  const int nj = static_cast<int>(r.joints.size());
+  // Compressed skeleton over fitted joints.
+  std::vector<int> index(static_cast<std::size_t>(nj), -1);
+  implicit::SkeletonParts sk;
+  std::vector<implicit::JointSetup> joints;
+  for (int j = 0; j < nj; ++j) {
+    const BonePart& b = fitted.bones()[j];
+    if (!b.fitted) continue;
+    int p = r.joints[j].parent;
+    while (p >= 0 && index[p] < 0) p = r.joints[p].parent;
+    index[j] = static_cast<int>(sk.parent.size());
+    sk.parent.push_back(p >= 0 ? index[p] : -1);
+    sk.parts.push_back(b.fit.field());
+    sk.transforms.push_back(to_rigid3f(to_affine(b.fit.local_to_world)));
+    joint_of_leaf_id_.push_back(j);
+    const JointOperator op = setup.operator_for(r.joints[j].name, kind_);
+    joint_ops_.push_back(r.joints[j].name + ": " + to_string(op));
+    implicit::JointSetup js;
+    switch (op) {
+      case JointOperator::kUnion:
+        js.op = implicit::NodeOperator::max();
+        break;
+      case JointOperator::kBlend:
+        js.op = implicit::NodeOperator::gradient_blend(operators::Controller::preset("blend2013"));
+        break;
+      case JointOperator::kBulge:
+        js.op = implicit::NodeOperator::grid_operator(
+            cached_operator("bulge", setup.operator_resolution, setup.operator_slices, progress),
+            operators::Controller::preset("bulge"), "bulge");
+        js.bulge_pair = kind_ == TreeKind::k2014;
+        break;
+      case JointOperator::kContact:
+      case JointOperator::kAuto:
+        js.op = implicit::NodeOperator::grid_operator(
+            cached_operator("contact", setup.operator_resolution, setup.operator_slices, progress),
+            operators::Controller::preset("contact"), "contact");
+        break;
+    }
+    joints.push_back(js);
+  }
+  // Several roots: hang the later ones under the first.
+  int first_root = -1;
+  for (std::size_t i = 0; i < sk.parent.size(); ++i)
+    if (sk.parent[i] < 0) {
+      if (first_root < 0)
+        first_root = static_cast<int>(i);
+      else
+        sk.parent[i] = first_root;
+    }
+  const implicit::CompositionTree t = kind_ == TreeKind::k2013 ? implicit::build_tree_2013(sk, joints)
+                                                               : implicit::build_tree_2014(sk, joints);
+  tape_ = std::make_shared<implicit::Tape>(t);
+}
+
+void SkinField::set_pose(const std::vector<Affine>& skin) {
+  const Rig& r = fitted_->rig();
+  require(skin.size() == r.joints.size(), r.name + ": pose", "one skinning matrix per joint",
+          "pass skinning_matrices()");
+  for (std::size_t i = 0; i < joint_of_leaf_id_.size(); ++i) {
+    const BonePart& b = fitted_->bones()[joint_of_leaf_id_[i]];
+    tape_->set_transform_of(static_cast<int>(i), to_rigid3f(skin[b.joint] * to_affine(b.fit.local_to_world)));
+  }
+}
+
+track::FieldFunction SkinField::function(bool contacts) const {
+  std::shared_ptr<const implicit::Tape> tape = tape_;
+  if (!contacts) {
+    // Fast path: the tape's batched sparse evaluator (no per-node diagnostics).
+    return [tape](const Vec3f* p, std::size_t n, float* values, Vec3f* gradients, std::uint8_t*) {
+      thread_local std::vector<implicit::FieldSample> out;
+      out.resize(n);
+      tape->eval_batch(p, n, out.data(), 0);
+      for (std::size_t k = 0; k < n; ++k) {
+        values[k] = out[k].value;
+        gradients[k] = out[k].gradient;
+      }
+    };
+  }
+  return [tape](const Vec3f* p, std::size_t n, float* values, Vec3f* gradients, std::uint8_t* contact) {
+    thread_local std::vector<implicit::NodeDiagnostics> diag;
+    diag.resize(tape->size());
+    const auto& instr = tape->instructions();
+    for (std::size_t k = 0; k < n; ++k) {
+      const implicit::FieldSample s = tape->eval(p[k], contact ? diag.data() : nullptr, true);
+      values[k] = s.value;
+      gradients[k] = s.gradient;
+      if (contact) {
+        std::uint8_t c = 0;
+        for (std::size_t i = 0; i < instr.size(); ++i)
+          if (instr[i].leaf < 0 && diag[i].evaluated && diag[i].on_contact) c = 1;
+        contact[k] = c;
+      }
+    }
+  };
+}
+
+}  // namespace isokit::skinning

@@ -1,0 +1,172 @@
+// SPDX-License-Identifier: MIT
+// Geometric skin metrics: volume, edge distortion, displacement, per-frame evaluation.
+#include "isokit/skinning/metrics.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <utility>
+
+#include "metrics_check.h"
+
+namespace isokit::skinning {
+namespace {
+
+Eigen::Vector3d point(const track::Positions& p, Eigen::Index v) {
+  return p.row(v).cast<double>().transpose();
+}
+
+/// Unique undirected edges `{a, b}` with `a < b`, sorted (repeated indices give no edge).
+std::vector<std::array<int, 2>> unique_edges(const track::Triangles& triangles) {
+  std::vector<std::uint64_t> keys;
+  keys.reserve(static_cast<std::size_t>(triangles.rows()) * 3);
+  for (Eigen::Index f = 0; f < triangles.rows(); ++f)
+    for (int c = 0; c < 3; ++c) {
+      const int a = triangles(f, c), b = triangles(f, (c + 1) % 3);
+      if (a == b) continue;
+      const auto lo = static_cast<std::uint32_t>(std::min(a, b));
+      const auto hi = static_cast<std::uint32_t>(std::max(a, b));
+      keys.push_back(std::uint64_t(lo) << 32 | hi);
+    }
+  std::sort(keys.begin(), keys.end());
+  keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+  std::vector<std::array<int, 2>> edges(keys.size());
+  for (std::size_t e = 0; e < keys.size(); ++e)
+    edges[e] = {static_cast<int>(keys[e] >> 32), static_cast<int>(keys[e] & 0xffffffffu)};
+  return edges;
+}
+
+std::vector<double> edge_lengths(const track::Positions& p, const std::vector<std::array<int, 2>>& edges) {
+  std::vector<double> len(edges.size());
+  for (std::size_t e = 0; e < edges.size(); ++e)
+    len[e] = (point(p, edges[e][1]) - point(p, edges[e][0])).norm();
+  return len;
+}
+
+EdgeDistortion distortion(const track::Positions& posed, const std::vector<std::array<int, 2>>& edges,
+                          const std::vector<double>& rest_lengths) {
+  EdgeDistortion d;
+  double sum = 0;
+  for (std::size_t e = 0; e < edges.size(); ++e) {
+    if (rest_lengths[e] == 0) {
+      ++d.zero_rest_edges;
+      continue;
+    }
+    const double len = (point(posed, edges[e][1]) - point(posed, edges[e][0])).norm();
+    const double err = std::abs(len / rest_lengths[e] - 1);
+    sum += err;
+    ++d.edges;
+    if (err > d.max || d.worst_edge[0] < 0) {
+      d.max = err;
+      d.worst_edge = edges[e];
+    }
+  }
+  d.mean = d.edges > 0 ? sum / d.edges : 0;
+  return d;
+}
+
+/// Larger of two values where NaN means "not computed".
+double worse(double a, double b) {
+  if (std::isnan(a)) return b;
+  if (std::isnan(b)) return a;
+  return std::max(a, b);
+}
+int worse(int a, int b) {
+  return std::max(a, b);
+}  // -1 = not computed
+
+}  // namespace
+
+double enclosed_volume(const track::Positions& positions, const track::Triangles& triangles) {
+  detail::check_triangles(triangles, positions.rows(), "enclosed_volume");
+  if (positions.rows() == 0) return 0;
+  const Eigen::Vector3d centre = bounding_box(positions).center();
+  double six_volume = 0;
+  for (Eigen::Index f = 0; f < triangles.rows(); ++f) {
+    const Eigen::Vector3d a = point(positions, triangles(f, 0)) - centre;
+    const Eigen::Vector3d b = point(positions, triangles(f, 1)) - centre;
+    const Eigen::Vector3d c = point(positions, triangles(f, 2)) - centre;
+    six_volume += a.dot(b.cross(c));
+  }
+  return six_volume / 6;
+}
+
+EdgeDistortion edge_distortion(const track::Positions& rest, const track::Positions& posed,
+                               const track::Triangles& triangles) {
+  detail::check_same_vertex_count(rest, posed, "edge_distortion");
+  detail::check_triangles(triangles, rest.rows(), "edge_distortion");
+  const auto edges = unique_edges(triangles);
+  return distortion(posed, edges, edge_lengths(rest, edges));
+}
+
+double max_displacement(const track::Positions& a, const track::Positions& b) {
+  detail::check_same_vertex_count(a, b, "max_displacement");
+  double worst = 0;
+  for (Eigen::Index v = 0; v < a.rows(); ++v) worst = std::max(worst, (point(a, v) - point(b, v)).norm());
+  return worst;
+}
+
+Eigen::AlignedBox3d bounding_box(const track::Positions& positions) {
+  Eigen::AlignedBox3d box;  // empty
+  for (Eigen::Index v = 0; v < positions.rows(); ++v) box.extend(point(positions, v));
+  return box;
+}
+
+double bbox_diagonal(const track::Positions& positions) {
+  const Eigen::AlignedBox3d box = bounding_box(positions);
+  return box.isEmpty() ? 0.0 : box.diagonal().norm();
+}
+
+FrameMetrics worst_of(const FrameMetrics& a, const FrameMetrics& b) {
+  FrameMetrics w;
+  w.self_intersections = worse(a.self_intersections, b.self_intersections);
+  w.degenerate_faces = worse(a.degenerate_faces, b.degenerate_faces);
+  w.inverted_triangles = worse(a.inverted_triangles, b.inverted_triangles);
+  w.new_inverted_triangles = worse(a.new_inverted_triangles, b.new_inverted_triangles);
+  w.contact_vertices = worse(a.contact_vertices, b.contact_vertices);
+  w.edge_distortion_mean = worse(a.edge_distortion_mean, b.edge_distortion_mean);
+  w.edge_distortion_max = worse(a.edge_distortion_max, b.edge_distortion_max);
+  w.max_displacement = worse(a.max_displacement, b.max_displacement);
+  w.rest_distance = worse(a.rest_distance, b.rest_distance);
+  w.iso_residual_max = worse(a.iso_residual_max, b.iso_residual_max);
+  w.iso_residual_mean = worse(a.iso_residual_mean, b.iso_residual_mean);
+  // Volume: the frame whose ratio is farthest from 1 supplies both volume and ratio.
+  const bool a_ok = !std::isnan(a.volume_ratio), b_ok = !std::isnan(b.volume_ratio);
+  const FrameMetrics& v = !a_ok   ? b
+                          : !b_ok ? a
+                                  : (std::abs(b.volume_ratio - 1) > std::abs(a.volume_ratio - 1) ? b : a);
+  w.volume = v.volume;
+  w.volume_ratio = v.volume_ratio;
+  if (std::isnan(w.volume)) w.volume = std::isnan(a.volume) ? b.volume : a.volume;
+  return w;
+}
+
+FrameMetricsEvaluator::FrameMetricsEvaluator(track::Positions rest, track::Triangles triangles,
+                                             SelfIntersectionOptions options)
+    : rest_(std::move(rest)), triangles_(std::move(triangles)), options_(options) {
+  detail::check_triangles(triangles_, rest_.rows(), "FrameMetricsEvaluator");
+  edges_ = unique_edges(triangles_);
+  rest_lengths_ = edge_lengths(rest_, edges_);
+  rest_volume_ = enclosed_volume(rest_, triangles_);
+  rest_diagonal_ = bbox_diagonal(rest_);
+}
+
+FrameMetrics FrameMetricsEvaluator::evaluate(const track::Positions& posed) const {
+  detail::check_same_vertex_count(rest_, posed, "FrameMetricsEvaluator::evaluate");
+  FrameMetrics m;
+  SelfIntersectionDetails details;
+  SelfIntersectionOptions options = options_;
+  options.max_pairs = 0;
+  m.self_intersections = count_self_intersections(posed, triangles_, &details, options);
+  m.degenerate_faces = details.degenerate_count;
+  m.volume = enclosed_volume(posed, triangles_);
+  if (rest_volume_ != 0) m.volume_ratio = m.volume / rest_volume_;
+  const EdgeDistortion d = distortion(posed, edges_, rest_lengths_);
+  m.edge_distortion_mean = d.mean;
+  m.edge_distortion_max = d.max;
+  m.max_displacement = max_displacement(rest_, posed);
+  if (rest_diagonal_ > 0) m.rest_distance = m.max_displacement / rest_diagonal_;
+  return m;
+}
+
+}  // namespace isokit::skinning

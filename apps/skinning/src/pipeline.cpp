@@ -1,0 +1,289 @@
+// SPDX-License-Identifier: MIT
+#include "isokit/skinning/pipeline.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include "isokit/core/error.h"
+#include "isokit/core/parallel.h"
+#include "isokit/skinning/deform.h"
+#include "isokit/skinning/procedural.h"
+#include "isokit/skinning/rig_io.h"
+#include "isokit/skinning/weights.h"
+#include "isokit/track/projector2013.h"
+#include "isokit/track/tracker.h"
+
+namespace isokit::skinning {
+
+const char* to_string(Method m) {
+  switch (m) {
+    case Method::kLbs:
+      return "lbs";
+    case Method::kDqs:
+      return "dqs";
+    case Method::kImplicit2013:
+      return "implicit2013";
+    case Method::kTracking2014:
+      return "tracking2014";
+  }
+  return "?";
+}
+
+std::vector<Method> all_methods() {
+  return {Method::kLbs, Method::kDqs, Method::kImplicit2013, Method::kTracking2014};
+}
+
+Method method_from_string(const std::string& s) {
+  for (Method m : all_methods())
+    if (s == to_string(m)) return m;
+  throw InputError("--method: unknown method '" + s + "'; use lbs, dqs, implicit2013 or tracking2014");
+}
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double ms_since(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+bool same_pose(const Pose& a, const Pose& b) {
+  for (std::size_t j = 0; j < a.size(); ++j)
+    if (!a[j].matrix().isApprox(b[j].matrix(), 1e-9) &&
+        (a[j].matrix() - b[j].matrix()).cwiseAbs().maxCoeff() > 1e-9)
+      return false;
+  return true;
+}
+
+/// Per triangle: 1 when its normal points along +∇f at its centroid (QUALITY.md "inverted").
+std::vector<std::uint8_t> inverted_flags(const track::FieldFunction& f, const track::Positions& p,
+                                         const track::Triangles& t) {
+  const std::size_t n = static_cast<std::size_t>(t.rows());
+  std::vector<Vec3f> c(n), g(n);
+  std::vector<float> v(n);
+  std::vector<std::uint8_t> contact(n, 0), out(n, 0);
+  for (std::size_t k = 0; k < n; ++k) {
+    const Eigen::Vector3f m = (p.row(t(k, 0)) + p.row(t(k, 1)) + p.row(t(k, 2))) / 3.f;
+    c[k] = {m.x(), m.y(), m.z()};
+  }
+  parallel_for(n, 1024, [&](std::size_t b, std::size_t e) {
+    f(c.data() + b, e - b, v.data() + b, g.data() + b, contact.data() + b);
+    for (std::size_t k = b; k < e; ++k) {
+      const Eigen::Vector3f a = p.row(t(k, 0)), bb = p.row(t(k, 1)), cc = p.row(t(k, 2));
+      const Eigen::Vector3f nrm = (bb - a).cross(cc - a);
+      out[k] = nrm.x() * g[k].x + nrm.y() * g[k].y + nrm.z() * g[k].z > 0 ? 1 : 0;
+    }
+  });
+  return out;
+}
+
+}  // namespace
+
+Rig open_rig(const std::string& spec, double fps, const Progress& progress) {
+  const std::string prefix = "procedural:";
+  Rig rig;
+  if (spec.rfind(prefix, 0) == 0) {
+    rig = make_procedural(spec.substr(prefix.size()));
+  } else {
+    LoadOptions o;
+    o.fps = fps;
+    rig = load_rig(spec, o);
+  }
+  if (rig.weights.empty()) {
+    HeatWeightOptions h;
+    if (progress) h.progress = [&](int done, int total) { progress("heat weights", done, total); };
+    rig.weights = heat_weights(rig, h);
+  }
+  validate(rig);
+  return rig;
+}
+
+Skinner::Skinner(Rig rig, SkinSetup setup, Progress progress)
+    : rig_(std::move(rig)), setup_(std::move(setup)), progress_(std::move(progress)) {
+  validate(rig_);
+  require(!rig_.weights.empty(), rig_.name + ": weights", "the rig has no skin weights",
+          "give weights (heat weights are computed by isokit-skin when a file has none)");
+  fitted_ = std::make_unique<FittedRig>(rig_, setup_, progress_);
+  evaluator_ = std::make_unique<FrameMetricsEvaluator>(rig_.rest, rig_.triangles);
+}
+
+Skinner::~Skinner() = default;
+
+SkinField& Skinner::field(TreeKind kind) {
+  std::unique_ptr<SkinField>& f = kind == TreeKind::k2013 ? field2013_ : field2014_;
+  if (!f) f = std::make_unique<SkinField>(*fitted_, setup_, kind, progress_);
+  return *f;
+}
+
+FrameMetrics Skinner::measure(const Pose& pose, const track::Positions& positions, bool self_intersections,
+                              const std::vector<std::uint8_t>* contact) {
+  if (!metrics_field_) {
+    metrics_field_ = std::make_unique<SkinField>(*fitted_, setup_, TreeKind::k2014, progress_);
+    metrics_field_->set_pose(skinning_matrices(rig_, rest_pose(rig_)));
+    iso2014_ = track::sample_iso_values(metrics_field_->function(), rig_.rest);
+    rest_inverted_ = inverted_flags(metrics_field_->function(), rig_.rest, rig_.triangles);
+  }
+  FrameMetricsEvaluator* ev = evaluator_.get();
+  FrameMetrics m;
+  if (self_intersections) {
+    m = ev->evaluate(positions);
+  } else {
+    // Same numbers without the exact self-intersection pass.
+    const EdgeDistortion e = edge_distortion(rig_.rest, positions, rig_.triangles);
+    m.edge_distortion_mean = e.mean;
+    m.edge_distortion_max = e.max;
+    m.volume = enclosed_volume(positions, rig_.triangles);
+    m.volume_ratio = m.volume / ev->rest_volume();
+    m.max_displacement = max_displacement(rig_.rest, positions);
+    m.rest_distance = m.max_displacement / ev->rest_diagonal();
+  }
+  metrics_field_->set_pose(skinning_matrices(rig_, pose));
+  const track::FieldFunction f = metrics_field_->function(true);
+  const std::vector<std::uint8_t> inv = inverted_flags(f, positions, rig_.triangles);
+  m.inverted_triangles = 0;
+  m.new_inverted_triangles = 0;
+  for (std::size_t k = 0; k < inv.size(); ++k) {
+    m.inverted_triangles += inv[k];
+    m.new_inverted_triangles += inv[k] && !rest_inverted_[k] ? 1 : 0;
+  }
+  const std::size_t n = static_cast<std::size_t>(positions.rows());
+  std::vector<float> values(n);
+  std::vector<Vec3f> grads(n), pts(n);
+  std::vector<std::uint8_t> fc(n, 0);
+  for (std::size_t v = 0; v < n; ++v) pts[v] = {positions(v, 0), positions(v, 1), positions(v, 2)};
+  parallel_for(n, 1024, [&](std::size_t b, std::size_t e) {
+    f(pts.data() + b, e - b, values.data() + b, grads.data() + b, fc.data() + b);
+  });
+  double mx = 0, sum = 0;
+  int used = 0, contacts = 0;
+  for (std::size_t v = 0; v < n; ++v) {
+    const bool c = fc[v] || (contact && (*contact)[v]);
+    contacts += c ? 1 : 0;
+    if (c) continue;
+    const double r = std::abs(double(values[v]) - double(iso2014_[v]));
+    mx = std::max(mx, r);
+    sum += r;
+    ++used;
+  }
+  m.iso_residual_max = mx;
+  m.iso_residual_mean = used ? sum / used : 0.0;
+  m.contact_vertices = contacts;
+  return m;
+}
+
+BakeResult Skinner::bake(Method method, const std::vector<Pose>& poses, const BakeOptions& options) {
+  require(!poses.empty(), rig_.name + ": animation", "has no frames", "give a clip, --bend or a pose script");
+  for (const Pose& p : poses)
+    require(p.size() == rig_.joints.size(), rig_.name + ": animation", "a pose has the wrong joint count",
+            "one local transform per joint");
+  BakeResult out;
+  out.method = method;
+  const Pose rest = rest_pose(rig_);
+  const int nv = static_cast<int>(rig_.rest.rows());
+  const std::vector<int>& partition = fitted_->partition();
+
+  std::unique_ptr<track::IsoSurfaceTracker> tracker;
+  std::unique_ptr<track::Projector2013> projector;
+  SkinField* field = nullptr;
+  if (method == Method::kTracking2014) {
+    field = &this->field(setup_.tree == TreeKind::k2013 ? TreeKind::k2013 : TreeKind::k2014);
+    field->set_pose(skinning_matrices(rig_, rest));
+    std::vector<float> iso = track::sample_iso_values(field->function(), rig_.rest);
+    track::TrackerOptions to = setup_.tracker;
+    to.grain = options.grain;
+    tracker = std::make_unique<track::IsoSurfaceTracker>(rig_.rest, rig_.triangles, std::move(iso), to);
+    std::vector<float> mask(static_cast<std::size_t>(nv));
+    for (int v = 0; v < nv; ++v) mask[v] = setup_.relaxation_for(rig_.joints[partition[v]].name);
+    tracker->set_relaxation_mask(std::move(mask));
+  } else if (method == Method::kImplicit2013) {
+    field = &this->field(setup_.tree == TreeKind::k2014 ? TreeKind::k2014 : TreeKind::k2013);
+    field->set_pose(skinning_matrices(rig_, rest));
+    track::ProjectorOptions po = setup_.projector;
+    po.grain = options.grain;
+    projector = std::make_unique<track::Projector2013>(rig_.rest, rig_.triangles, field->function(), po);
+  }
+
+  track::Positions current = rig_.rest;
+  Pose previous = rest;
+  std::vector<Affine> prev_skin = skinning_matrices(rig_, rest);
+  double total_ms = 0, vertex_iterations = 0;
+  for (std::size_t f = 0; f < poses.size(); ++f) {
+    FrameStats st;
+    const auto t0 = Clock::now();
+    const std::vector<Affine> skin = skinning_matrices(rig_, poses[f]);
+    track::Positions pos;
+    const std::vector<std::uint8_t>* contact = nullptr;
+    switch (method) {
+      case Method::kLbs:
+        linear_blend(rig_.weights, skin, rig_.rest, pos, options.grain);
+        break;
+      case Method::kDqs:
+        dual_quaternion_blend(rig_.weights, skin, rig_.rest, pos, nullptr, options.grain);
+        break;
+      case Method::kImplicit2013: {
+        dual_quaternion_blend(rig_.weights, skin, rig_.rest, pos, nullptr, options.grain);
+        field->set_pose(skin);
+        const track::TrackStats ts = projector->project(field->function(), pos);
+        st.iterations = ts.iterations;
+        st.lost_vertices = ts.lost_vertices;
+        contact = &projector->flags().contact;
+        break;
+      }
+      case Method::kTracking2014: {
+        const int n = substeps(rig_, previous, poses[f], setup_.substeps);
+        st.substeps = n;
+        std::vector<Mat3f> rotations;
+        track::Positions scratch;
+        for (int s = 1; s <= n; ++s) {
+          const Pose ps = s == n ? poses[f] : interpolate(previous, poses[f], double(s) / n);
+          const std::vector<Affine> sk = skinning_matrices(rig_, ps);
+          // Stage 1 (2014 §5): each vertex moved by its partition joint's rigid delta.
+          std::vector<Eigen::Matrix<double, 3, 4>> delta(sk.size());
+          for (std::size_t j = 0; j < sk.size(); ++j)
+            delta[j] = (rigid_part(sk[j]) * rigid_part(prev_skin[j]).inverse()).matrix().topRows<3>();
+          parallel_for(static_cast<std::size_t>(nv), options.grain, [&](std::size_t b, std::size_t e) {
+            for (std::size_t v = b; v < e; ++v) {
+              const Eigen::Vector4d p(current(v, 0), current(v, 1), current(v, 2), 1.0);
+              current.row(static_cast<Eigen::Index>(v)) = (delta[partition[v]] * p).cast<float>().transpose();
+            }
+          });
+          dual_quaternion_blend(rig_.weights, sk, rig_.rest, scratch, &rotations, options.grain);
+          field->set_pose(sk);
+          const track::TrackStats ts = tracker->track(field->function(), rotations, current);
+          st.iterations += ts.iterations;
+          st.lost_vertices = ts.lost_vertices;
+          prev_skin = sk;
+        }
+        previous = poses[f];
+        pos = current;
+        contact = &tracker->flags().contact;
+        break;
+      }
+    }
+    st.ms = ms_since(t0);
+    total_ms += st.ms;
+    vertex_iterations += double(nv) * st.iterations;
+    if (options.metrics) {
+      std::vector<std::uint8_t> excluded;
+      if (contact) {
+        excluded = *contact;
+        if (tracker)
+          for (int v = 0; v < nv; ++v) excluded[v] |= tracker->flags().beta[v] > 0 ? 1 : 0;
+      }
+      st.metrics = measure(poses[f], pos, options.self_intersections, contact ? &excluded : nullptr);
+      out.worst = f == 0 ? st.metrics : worst_of(out.worst, st.metrics);
+    }
+    if (progress_)
+      progress_(std::string("bake ") + to_string(method), static_cast<int>(f + 1),
+                static_cast<int>(poses.size()));
+    out.frames.push_back(std::move(pos));
+    out.stats.push_back(st);
+  }
+  out.mean_ms = total_ms / double(poses.size());
+  out.vertex_iterations_per_second = total_ms > 0 ? vertex_iterations / (total_ms * 1e-3) : 0;
+  if (same_pose(poses.back(), rest))
+    out.rest_recovery = max_displacement(out.frames.back(), rig_.rest) / bbox_diagonal(rig_.rest);
+  return out;
+}
+
+}  // namespace isokit::skinning

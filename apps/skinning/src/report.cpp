@@ -1,0 +1,132 @@
+// SPDX-License-Identifier: MIT
+#include "isokit/skinning/report.h"
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "isokit/core/error.h"
+
+namespace isokit::skinning {
+
+namespace {
+
+using nlohmann::json;
+
+json num(double v) {
+  return std::isfinite(v) ? json(v) : json(nullptr);
+}
+json count(int v) {
+  return v >= 0 ? json(v) : json(nullptr);
+}
+
+json metrics_to_json(const FrameMetrics& m) {
+  return json{{"self_intersections", count(m.self_intersections)},
+              {"degenerate_faces", count(m.degenerate_faces)},
+              {"inverted_triangles", count(m.inverted_triangles)},
+              {"new_inverted_triangles", count(m.new_inverted_triangles)},
+              {"iso_residual_max", num(m.iso_residual_max)},
+              {"iso_residual_mean", num(m.iso_residual_mean)},
+              {"contact_vertices", count(m.contact_vertices)},
+              {"edge_distortion_mean", num(m.edge_distortion_mean)},
+              {"edge_distortion_max", num(m.edge_distortion_max)},
+              {"volume_ratio", num(m.volume_ratio)},
+              {"max_displacement", num(m.max_displacement)}};
+}
+
+double dqs_ms(const std::vector<BakeResult>& results) {
+  for (const BakeResult& r : results)
+    if (r.method == Method::kDqs) return r.mean_ms;
+  return std::nan("");
+}
+
+}  // namespace
+
+std::string metrics_json(const Rig& rig, const std::vector<BakeResult>& results, const ReportContext& c) {
+  json j;
+  j["rig"] = rig.name;
+  j["vertices"] = rig.rest.rows();
+  j["triangles"] = rig.triangles.rows();
+  j["joints"] = rig.joints.size();
+  j["animation"] = c.animation;
+  j["fps"] = c.fps;
+  j["threads"] = c.threads;
+  j["fit_seconds"] = c.fit_seconds;
+  const double dqs = dqs_ms(results);
+  json methods = json::object();
+  for (const BakeResult& r : results) {
+    json m;
+    m["mean_ms"] = r.mean_ms;
+    m["ratio_to_dqs"] = num(r.mean_ms / dqs);
+    m["vertex_iterations_per_second"] = r.vertex_iterations_per_second;
+    m["rest_recovery"] = r.rest_recovery >= 0 ? json(r.rest_recovery) : json(nullptr);
+    m["worst"] = metrics_to_json(r.worst);
+    json frames = json::array();
+    for (std::size_t f = 0; f < r.stats.size(); ++f) {
+      const FrameStats& s = r.stats[f];
+      json fr = metrics_to_json(s.metrics);
+      fr["frame"] = f;
+      fr["ms"] = s.ms;
+      fr["substeps"] = s.substeps;
+      fr["iterations"] = s.iterations;
+      fr["lost_vertices"] = s.lost_vertices;
+      frames.push_back(fr);
+    }
+    m["frames"] = frames;
+    methods[to_string(r.method)] = m;
+  }
+  j["methods"] = methods;
+  return j.dump(2) + "\n";
+}
+
+std::string comparison_table(const std::vector<BakeResult>& results) {
+  const double dqs = dqs_ms(results);
+  auto fmt = [](const char* f, double v) {
+    if (!std::isfinite(v)) return std::string("-");
+    char b[64];
+    std::snprintf(b, sizeof b, f, v);
+    return std::string(b);
+  };
+  std::ostringstream o;
+  o << "| method | self-intersections | inverted triangles (new) | iso residual max | edge distortion mean / "
+       "max | "
+       "volume ratio | rest recovery | ms/frame | × dqs |\n";
+  o << "|---|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+  for (const BakeResult& r : results) {
+    const FrameMetrics& w = r.worst;
+    o << "| " << to_string(r.method) << " | "
+      << (w.self_intersections >= 0 ? std::to_string(w.self_intersections) : "-") << " | "
+      << (w.inverted_triangles >= 0 ? std::to_string(w.inverted_triangles) : "-") << " ("
+      << (w.new_inverted_triangles >= 0 ? std::to_string(w.new_inverted_triangles) : "-") << ") | "
+      << fmt("%.1e", w.iso_residual_max) << " | " << fmt("%.3f", w.edge_distortion_mean) << " / "
+      << fmt("%.3f", w.edge_distortion_max) << " | " << fmt("%.4f", w.volume_ratio) << " | "
+      << (r.rest_recovery >= 0 ? fmt("%.1e", r.rest_recovery) : "-") << " | " << fmt("%.2f", r.mean_ms)
+      << " | " << fmt("%.1f", r.mean_ms / dqs) << " |\n";
+  }
+  return o.str();
+}
+
+void write_text_file(const std::string& path, const std::string& text) {
+  namespace fs = std::filesystem;
+  const fs::path p(path);
+  if (p.has_parent_path()) {
+    std::error_code ec;
+    fs::create_directories(p.parent_path(), ec);
+  }
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream out(tmp, std::ios::binary);
+    require(bool(out), path, "cannot be written", "check that the folder exists and is writable");
+    out << text;
+    out.close();
+    require(bool(out), path, "write failed", "check the free disk space");
+  }
+  std::error_code ec;
+  fs::rename(tmp, path, ec);
+  require(!ec, path, "cannot be replaced (" + ec.message() + ")", "check the permissions");
+}
+
+}  // namespace isokit::skinning

@@ -1,0 +1,1011 @@
+// SPDX-License-Identifier: MIT
+// load_rig: assimp scene -> Rig (merged, welded mesh; joints parents first with the bind pose as
+// rest pose; all weight sets; clips sampled at a fixed rate). glTF files are checked first with
+// the private glTF reader (container, JSON, joint indices of every weight set), because assimp
+// drops out-of-range joint indices silently and reports malformed files only as
+// "no suitable reader".
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <map>
+#include <ostream>
+#include <random>
+#include <set>
+#include <unordered_map>
+
+#include <assimp/config.h>
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+#include <assimp/Importer.hpp>
+
+#include "gltf_io.h"
+#include "isokit/core/error.h"
+#include "isokit/skinning/rig_io.h"
+
+namespace isokit::skinning {
+
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+// Relative tolerance under which two bind matrices of one joint count as equal.
+constexpr double kBindTolerance = 1e-4;
+
+Affine to_affine(const aiMatrix4x4& m) {
+  Eigen::Matrix4d e;
+  e << m.a1, m.a2, m.a3, m.a4, m.b1, m.b2, m.b3, m.b4, m.c1, m.c2, m.c3, m.c4, m.d1, m.d2, m.d3, m.d4;
+  Affine a;
+  a.matrix() = e;
+  a.matrix().row(3) << 0, 0, 0, 1;
+  return a;
+}
+
+// Bottom row (0, 0, 0, 1) within float rounding (exporters write 0.99999988); `to_affine` then
+// drops the row.
+bool is_affine(const aiMatrix4x4& m) {
+  return std::abs(m.d1) < 1e-5 && std::abs(m.d2) < 1e-5 && std::abs(m.d3) < 1e-5 && std::abs(m.d4 - 1) < 1e-5;
+}
+
+double max_abs(const Eigen::Matrix4d& m) {
+  return m.cwiseAbs().maxCoeff();
+}
+
+bool nearly_equal(const Affine& a, const Affine& b) {
+  const double scale = std::max({1.0, max_abs(a.matrix()), max_abs(b.matrix())});
+  return max_abs(a.matrix() - b.matrix()) <= kBindTolerance * scale;
+}
+
+// Identity within float rounding; `length` is the scale of the translations that formed `a`.
+bool nearly_identity(const Affine& a, double length) {
+  return (a.linear() - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() <= 1e-6 &&
+         a.translation().cwiseAbs().maxCoeff() <= 1e-6 * std::max(1.0, length);
+}
+
+bool has_shear(const Affine& a) {
+  const Eigen::Matrix3d g = a.linear().transpose() * a.linear();
+  const double diag = g.diagonal().cwiseAbs().maxCoeff();
+  double off = 0;
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c)
+      if (r != c) off = std::max(off, std::abs(g(r, c)));
+  return off > 1e-4 * std::max(diag, 1e-30);
+}
+
+std::string quote(const std::string& s) {
+  return "'" + s + "'";
+}
+
+// ---------------------------------------------------------------------------------------------
+// glTF pre-check
+
+struct GltfInfo {
+  std::vector<std::string> skin_joint_names;  ///< assimp's names of the skins' joint nodes
+  /// A self-contained copy to give assimp instead of the file (empty: read the file itself).
+  std::string patched;
+};
+
+// assimp 5.2 crashes on a skin without inverseBindMatrices (optional in glTF: identities). Such
+// files are rewritten for assimp: identity matrices added, every buffer embedded as a data URI,
+// images, textures and material details dropped (the rig needs none of them).
+std::string patch_for_assimp(const gltf::Document& doc, LoadReport& report) {
+  json j = doc.json;
+  if (!j.contains("buffers")) j["buffers"] = json::array();
+  json& buffers = j["buffers"];
+  for (std::size_t i = 0; i < doc.buffers.size(); ++i)
+    buffers[i]["uri"] = "data:application/octet-stream;base64," +
+                        gltf::base64_encode(doc.buffers[i].data(), doc.buffers[i].size());
+  if (!j.contains("bufferViews")) j["bufferViews"] = json::array();
+  if (!j.contains("accessors")) j["accessors"] = json::array();
+  json& skins = j["skins"];
+  for (std::size_t s = 0; s < skins.size(); ++s) {
+    if (skins[s].contains("inverseBindMatrices")) continue;
+    const std::size_t n = skins[s]["joints"].size();
+    std::vector<std::uint8_t> bytes(64 * n, 0);
+    for (std::size_t k = 0; k < n; ++k)
+      for (std::size_t d = 0; d < 4; ++d) {
+        const float one = 1.0f;
+        std::memcpy(bytes.data() + 64 * k + 20 * d, &one, 4);  // little-endian hosts (assimp's too)
+      }
+    buffers.push_back(
+        {{"byteLength", bytes.size()},
+         {"uri", "data:application/octet-stream;base64," + gltf::base64_encode(bytes.data(), bytes.size())}});
+    j["bufferViews"].push_back({{"buffer", buffers.size() - 1}, {"byteLength", bytes.size()}});
+    j["accessors"].push_back({{"bufferView", j["bufferViews"].size() - 1},
+                              {"componentType", gltf::kFloat},
+                              {"count", n},
+                              {"type", "MAT4"}});
+    skins[s]["inverseBindMatrices"] = j["accessors"].size() - 1;
+    report.warnings.push_back("skin " + std::to_string(s) +
+                              " has no inverse bind matrices: identities (glTF default)");
+  }
+  j.erase("images");
+  j.erase("textures");
+  j.erase("samplers");
+  if (j.contains("materials"))
+    for (json& m : j["materials"]) m = json{{"name", m.value("name", std::string())}};
+  return j.dump();
+}
+
+// assimp names an unnamed glTF node "nodes[i]".
+std::string gltf_node_name(const json& nodes, std::size_t i) {
+  const json& n = nodes[i];
+  if (n.contains("name") && n["name"].is_string() && !n["name"].get<std::string>().empty())
+    return n["name"].get<std::string>();
+  return "nodes[" + std::to_string(i) + "]";
+}
+
+GltfInfo check_gltf(const std::string& path, LoadReport& report) {
+  const gltf::Document doc = gltf::read_document(path);
+  const json& j = doc.json;
+  GltfInfo info;
+  const json empty = json::array();
+  const json& nodes = j.contains("nodes") && j["nodes"].is_array() ? j["nodes"] : empty;
+  const json& skins = j.contains("skins") && j["skins"].is_array() ? j["skins"] : empty;
+  const json& meshes = j.contains("meshes") && j["meshes"].is_array() ? j["meshes"] : empty;
+  std::set<std::string> names;
+  for (std::size_t s = 0; s < skins.size(); ++s) {
+    const std::string what = path + ": skins[" + std::to_string(s) + "]";
+    require(skins[s].contains("joints") && skins[s]["joints"].is_array(), what, "has no joints array",
+            "fix the file or export it again");
+    const json& joints = skins[s]["joints"];
+    for (std::size_t k = 0; k < joints.size(); ++k) {
+      const bool ok = joints[k].is_number_integer() && joints[k].get<long long>() >= 0 &&
+                      joints[k].get<std::size_t>() < nodes.size();
+      require(ok, what + ".joints[" + std::to_string(k) + "]", "names a node that does not exist",
+              "fix the file or export it again");
+      const std::string name = gltf_node_name(nodes, joints[k].get<std::size_t>());
+      if (names.insert(name).second) info.skin_joint_names.push_back(name);
+    }
+    if (skins[s].contains("inverseBindMatrices")) {
+      int comps = 0;
+      const std::vector<double> m = gltf::read_accessor(doc, skins[s]["inverseBindMatrices"].get<int>(),
+                                                        &comps, what + ".inverseBindMatrices");
+      require(comps == 16 && m.size() >= 16 * joints.size(), what + ".inverseBindMatrices",
+              "needs one MAT4 per joint", "fix the file or export it again");
+      for (double x : m)
+        require(std::isfinite(x), what + ".inverseBindMatrices", "has a non-finite value",
+                "fix the bind pose and export again");
+    }
+  }
+  for (std::size_t n = 0; n < nodes.size(); ++n) {
+    const json& node = nodes[n];
+    if (!node.contains("mesh") || !node.contains("skin")) continue;
+    const std::size_t m = node["mesh"].get<std::size_t>();
+    const std::size_t s = node["skin"].get<std::size_t>();
+    require(m < meshes.size() && s < skins.size(), path + ": node " + quote(gltf_node_name(nodes, n)),
+            "names a mesh or skin that does not exist", "fix the file or export it again");
+    if (node.contains("matrix") || node.contains("translation") || node.contains("rotation") ||
+        node.contains("scale"))
+      report.warnings.push_back("node " + quote(gltf_node_name(nodes, n)) +
+                                " has a transform; it is ignored because the mesh is skinned (glTF rule)");
+    const std::size_t njoints = skins[s]["joints"].size();
+    const json& prims = meshes[m].value("primitives", empty);
+    const std::string mesh_name = meshes[m].value("name", "meshes[" + std::to_string(m) + "]");
+    for (std::size_t p = 0; p < prims.size(); ++p) {
+      const json& attrs = prims[p].value("attributes", json::object());
+      const std::string where = path + ": mesh " + quote(mesh_name) + " primitive " + std::to_string(p);
+      if (attrs.contains("POSITION")) {
+        int comps = 0;
+        const std::vector<double> pos =
+            gltf::read_accessor(doc, attrs["POSITION"].get<int>(), &comps, where + " POSITION");
+        for (std::size_t i = 0; i < pos.size(); ++i)
+          require(std::isfinite(pos[i]), where + " vertex " + std::to_string(i / 3), "position is not finite",
+                  "fix the mesh and export again");
+      }
+      for (int set = 0;; ++set) {
+        const std::string jn = "JOINTS_" + std::to_string(set);
+        const std::string wn = "WEIGHTS_" + std::to_string(set);
+        if (!attrs.contains(jn) && !attrs.contains(wn)) break;
+        require(attrs.contains(jn) && attrs.contains(wn), where, jn + " and " + wn + " must come together",
+                "fix the file or export it again");
+        int jc = 0;
+        int wc = 0;
+        const std::vector<double> jv = gltf::read_accessor(doc, attrs[jn].get<int>(), &jc, where + " " + jn);
+        const std::vector<double> wv = gltf::read_accessor(doc, attrs[wn].get<int>(), &wc, where + " " + wn);
+        require(jc == 4 && wc == 4 && jv.size() == wv.size(), where,
+                jn + "/" + wn + " are not VEC4 of equal count", "fix the file or export it again");
+        for (std::size_t i = 0; i < wv.size(); ++i) {
+          const std::string vtx = where + " vertex " + std::to_string(i / 4);
+          require(std::isfinite(wv[i]) && wv[i] >= 0, vtx, wn + " has a negative or non-finite weight",
+                  "fix the skin weights and export again");
+          require(wv[i] == 0 || jv[i] < static_cast<double>(njoints), vtx,
+                  jn + " names joint " + format_number(jv[i]) + " but the skin has " +
+                      std::to_string(njoints) + " joints",
+                  "fix the skin (every weighted joint index must be below the skin's joint count)");
+        }
+      }
+    }
+  }
+  for (const json& skin : skins)
+    if (!skin.contains("inverseBindMatrices")) {
+      info.patched = patch_for_assimp(doc, report);
+      break;
+    }
+  return info;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Scene nodes
+
+struct Node {
+  const aiNode* ai{nullptr};
+  int parent{-1};
+  int depth{0};
+  std::string name;
+  Affine local{Affine::Identity()};
+  Affine world{Affine::Identity()};
+};
+
+struct Nodes {
+  std::vector<Node> list;  ///< depth-first pre-order: parents before children
+  std::unordered_map<std::string, std::vector<int>> by_name;
+};
+
+Nodes collect_nodes(const aiScene* scene, const std::string& path) {
+  Nodes nodes;
+  std::vector<std::pair<const aiNode*, int>> stack{{scene->mRootNode, -1}};
+  while (!stack.empty()) {
+    const auto [ai, parent] = stack.back();
+    stack.pop_back();
+    Node n;
+    n.ai = ai;
+    n.parent = parent;
+    n.name = ai->mName.C_Str();
+    const std::string what = path + ": node " + quote(n.name);
+    require(is_affine(ai->mTransformation), what, "transform is projective", "fix the node's transform");
+    n.local = to_affine(ai->mTransformation);
+    require(n.local.matrix().allFinite(), what, "transform is not finite", "fix the node's transform");
+    if (parent >= 0) {
+      n.depth = nodes.list[static_cast<std::size_t>(parent)].depth + 1;
+      n.world = nodes.list[static_cast<std::size_t>(parent)].world * n.local;
+    } else {
+      n.world = n.local;
+    }
+    const int index = static_cast<int>(nodes.list.size());
+    nodes.by_name[n.name].push_back(index);
+    nodes.list.push_back(std::move(n));
+    for (unsigned c = ai->mNumChildren; c-- > 0;) stack.push_back({ai->mChildren[c], index});
+  }
+  return nodes;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Welding
+
+struct Key {
+  std::uint32_t x, y, z;
+  bool operator==(const Key& o) const { return x == o.x && y == o.y && z == o.z; }
+};
+struct KeyHash {
+  std::size_t operator()(const Key& k) const {
+    return (static_cast<std::size_t>(k.x) * 73856093u) ^ (static_cast<std::size_t>(k.y) * 19349663u) ^
+           (static_cast<std::size_t>(k.z) * 83492791u);
+  }
+};
+
+std::uint32_t float_bits(float v) {
+  if (v == 0.0f) v = 0.0f;  // -0 == +0
+  std::uint32_t u;
+  std::memcpy(&u, &v, 4);
+  return u;
+}
+
+// Welded id of each point (ids by first occurrence).
+std::vector<int> weld(const std::vector<Eigen::Vector3f>& p, double tolerance) {
+  const std::size_t n = p.size();
+  std::vector<int> root(n);
+  for (std::size_t i = 0; i < n; ++i) root[i] = static_cast<int>(i);
+  auto find = [&](int i) {
+    while (root[static_cast<std::size_t>(i)] != i) {
+      root[static_cast<std::size_t>(i)] = root[static_cast<std::size_t>(root[static_cast<std::size_t>(i)])];
+      i = root[static_cast<std::size_t>(i)];
+    }
+    return i;
+  };
+  if (tolerance <= 0) {
+    std::unordered_map<Key, int, KeyHash> first;
+    for (std::size_t i = 0; i < n; ++i) {
+      const Key k{float_bits(p[i].x()), float_bits(p[i].y()), float_bits(p[i].z())};
+      const auto [it, inserted] = first.emplace(k, static_cast<int>(i));
+      if (!inserted) root[i] = it->second;
+    }
+  } else {
+    struct Cell {
+      long long x, y, z;
+      bool operator==(const Cell& o) const { return x == o.x && y == o.y && z == o.z; }
+    };
+    struct CellHash {
+      std::size_t operator()(const Cell& c) const {
+        return static_cast<std::size_t>(c.x * 73856093LL ^ c.y * 19349663LL ^ c.z * 83492791LL);
+      }
+    };
+    std::unordered_map<Cell, std::vector<int>, CellHash> grid;
+    const double tol2 = tolerance * tolerance;
+    for (std::size_t i = 0; i < n; ++i) {
+      const Cell c{static_cast<long long>(std::floor(p[i].x() / tolerance)),
+                   static_cast<long long>(std::floor(p[i].y() / tolerance)),
+                   static_cast<long long>(std::floor(p[i].z() / tolerance))};
+      for (long long dx = -1; dx <= 1; ++dx)
+        for (long long dy = -1; dy <= 1; ++dy)
+          for (long long dz = -1; dz <= 1; ++dz) {
+            const auto it = grid.find(Cell{c.x + dx, c.y + dy, c.z + dz});
+            if (it == grid.end()) continue;
+            for (int j : it->second)
+              if ((p[i] - p[static_cast<std::size_t>(j)]).cast<double>().squaredNorm() <= tol2) {
+                const int a = find(static_cast<int>(i));
+                const int b = find(j);
+                if (a != b) root[static_cast<std::size_t>(std::max(a, b))] = std::min(a, b);
+              }
+          }
+      grid[c].push_back(static_cast<int>(i));
+    }
+  }
+  std::vector<int> id(n, -1);
+  std::vector<int> id_of_root(n, -1);
+  int next = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto r = static_cast<std::size_t>(find(static_cast<int>(i)));
+    if (id_of_root[r] < 0) id_of_root[r] = next++;
+    id[i] = id_of_root[r];
+  }
+  return id;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Animation sampling
+
+struct Trs {
+  Eigen::Vector3d t{Eigen::Vector3d::Zero()};
+  Eigen::Quaterniond r{Eigen::Quaterniond::Identity()};
+  Eigen::Vector3d s{Eigen::Vector3d::Ones()};
+};
+
+Trs decompose(const Affine& a) {
+  Trs out;
+  out.t = a.translation();
+  Eigen::Matrix3d rot;
+  Eigen::Matrix3d scale;
+  a.computeRotationScaling(&rot, &scale);
+  out.r = Eigen::Quaterniond(rot).normalized();
+  out.s = scale.diagonal();
+  return out;
+}
+
+Affine compose(const Trs& x) {
+  Affine a = Affine::Identity();
+  a.translate(x.t);
+  a.rotate(x.r.normalized());
+  a.scale(x.s);
+  return a;
+}
+
+template <typename KeyT>
+std::size_t key_after(const KeyT* keys, unsigned n, double t) {
+  const auto* it = std::upper_bound(keys, keys + n, t, [](double v, const KeyT& k) { return v < k.mTime; });
+  return static_cast<std::size_t>(it - keys);
+}
+
+Eigen::Vector3d sample(const aiVectorKey* keys, unsigned n, double t, const Eigen::Vector3d& fallback) {
+  if (n == 0) return fallback;
+  auto v = [](const aiVector3D& x) { return Eigen::Vector3d(x.x, x.y, x.z); };
+  if (t <= keys[0].mTime) return v(keys[0].mValue);
+  if (t >= keys[n - 1].mTime) return v(keys[n - 1].mValue);
+  const std::size_t b = key_after(keys, n, t);
+  const std::size_t a = b - 1;
+  const double span = keys[b].mTime - keys[a].mTime;
+  const double u = span > 0 ? (t - keys[a].mTime) / span : 0.0;
+  return (1 - u) * v(keys[a].mValue) + u * v(keys[b].mValue);
+}
+
+Eigen::Quaterniond sample(const aiQuatKey* keys, unsigned n, double t, const Eigen::Quaterniond& fallback) {
+  if (n == 0) return fallback;
+  auto q = [](const aiQuaternion& x) { return Eigen::Quaterniond(x.w, x.x, x.y, x.z).normalized(); };
+  if (t <= keys[0].mTime) return q(keys[0].mValue);
+  if (t >= keys[n - 1].mTime) return q(keys[n - 1].mValue);
+  const std::size_t b = key_after(keys, n, t);
+  const std::size_t a = b - 1;
+  const double span = keys[b].mTime - keys[a].mTime;
+  const double u = span > 0 ? (t - keys[a].mTime) / span : 0.0;
+  return q(keys[a].mValue).slerp(u, q(keys[b].mValue));
+}
+
+void check_keys(const aiNodeAnim* ch, const std::string& what) {
+  for (unsigned k = 0; k < ch->mNumPositionKeys; ++k) {
+    const auto& v = ch->mPositionKeys[k];
+    require(std::isfinite(v.mTime) && std::isfinite(v.mValue.x) && std::isfinite(v.mValue.y) &&
+                std::isfinite(v.mValue.z),
+            what, "a translation key is not finite", "fix the animation and export again");
+  }
+  for (unsigned k = 0; k < ch->mNumRotationKeys; ++k) {
+    const auto& v = ch->mRotationKeys[k];
+    const double norm = std::sqrt(v.mValue.w * v.mValue.w + v.mValue.x * v.mValue.x +
+                                  v.mValue.y * v.mValue.y + v.mValue.z * v.mValue.z);
+    require(std::isfinite(v.mTime) && std::isfinite(norm) && norm > 1e-12, what,
+            "a rotation key is not finite or zero", "fix the animation and export again");
+  }
+  for (unsigned k = 0; k < ch->mNumScalingKeys; ++k) {
+    const auto& v = ch->mScalingKeys[k];
+    require(std::isfinite(v.mTime) && std::isfinite(v.mValue.x) && std::isfinite(v.mValue.y) &&
+                std::isfinite(v.mValue.z),
+            what, "a scale key is not finite", "fix the animation and export again");
+  }
+}
+
+double last_key_time(const aiNodeAnim* ch) {
+  double t = 0;
+  if (ch->mNumPositionKeys) t = std::max(t, ch->mPositionKeys[ch->mNumPositionKeys - 1].mTime);
+  if (ch->mNumRotationKeys) t = std::max(t, ch->mRotationKeys[ch->mNumRotationKeys - 1].mTime);
+  if (ch->mNumScalingKeys) t = std::max(t, ch->mScalingKeys[ch->mNumScalingKeys - 1].mTime);
+  return t;
+}
+
+// ---------------------------------------------------------------------------------------------
+
+struct MeshUse {
+  int node{-1};
+  const aiMesh* mesh{nullptr};
+  std::string name;                  ///< for messages
+  Affine to_scene;                   ///< file vertex -> rig rest (bind pose, scene space)
+  std::vector<int> bone_joint_node;  ///< per aiBone: node index
+};
+
+class Loader {
+ public:
+  Loader(const std::string& path, const LoadOptions& options, LoadReport& report)
+      : path_(path), options_(options), report_(report) {}
+
+  Rig load();
+
+ private:
+  int node_named(const std::string& name, const std::string& what) const;
+  void select_meshes();
+  void bind_pose();
+  void build_joints();
+  void build_mesh();
+  void build_clips();
+
+  const std::string& path_;
+  const LoadOptions& options_;
+  LoadReport& report_;
+  GltfInfo gltf_;
+  Assimp::Importer importer_;
+  const aiScene* scene_{nullptr};
+  Nodes nodes_;
+  std::vector<MeshUse> meshes_;
+  bool skinned_{false};
+  std::map<int, Affine> bind_world_;  ///< node -> world transform at the bind pose (bones)
+  std::vector<int> joint_node_;       ///< joint -> node
+  std::vector<int> node_joint_;       ///< node -> joint or -1
+  Rig rig_;
+};
+
+int Loader::node_named(const std::string& name, const std::string& what) const {
+  const auto it = nodes_.by_name.find(name);
+  require(it != nodes_.by_name.end(), what, "names no node of the scene",
+          "fix the skeleton (every bone must be a node) and export again");
+  require(it->second.size() == 1, what, "name is shared by " + std::to_string(it->second.size()) + " nodes",
+          "give every joint a unique name and export again");
+  return it->second.front();
+}
+
+void Loader::select_meshes() {
+  std::set<const aiMesh*> seen;
+  std::vector<std::string> all_names;
+  std::vector<MeshUse> candidates;
+  for (std::size_t n = 0; n < nodes_.list.size(); ++n) {
+    const aiNode* ai = nodes_.list[n].ai;
+    for (unsigned k = 0; k < ai->mNumMeshes; ++k) {
+      const unsigned mi = ai->mMeshes[k];
+      require(mi < scene_->mNumMeshes, path_ + ": node " + quote(nodes_.list[n].name), "names a missing mesh",
+              "fix the file");
+      const aiMesh* mesh = scene_->mMeshes[mi];
+      std::string name = mesh->mName.length ? mesh->mName.C_Str() : "mesh " + std::to_string(mi);
+      all_names.push_back(name);
+      if (!seen.insert(mesh).second) {
+        report_.warnings.push_back("mesh " + quote(name) +
+                                   " is used by several nodes; only its first use is loaded");
+        continue;
+      }
+      if (!options_.mesh.empty() && options_.mesh != name && options_.mesh != nodes_.list[n].name) continue;
+      bool triangles = false;
+      for (unsigned f = 0; f < mesh->mNumFaces && !triangles; ++f)
+        triangles = mesh->mFaces[f].mNumIndices == 3;
+      if (!triangles) {
+        report_.warnings.push_back("mesh " + quote(name) + " has no triangles (points or lines); skipped");
+        continue;
+      }
+      MeshUse use;
+      use.node = static_cast<int>(n);
+      use.mesh = mesh;
+      use.name = name;
+      candidates.push_back(std::move(use));
+    }
+  }
+  if (!options_.mesh.empty()) {
+    std::string list;
+    for (const std::string& s : all_names) list += (list.empty() ? "" : ", ") + quote(s);
+    require(!candidates.empty(), path_ + ": LoadOptions::mesh",
+            "no triangle mesh is named " + quote(options_.mesh),
+            "choose one of: " + (list.empty() ? std::string("(no meshes)") : list));
+  }
+  require(!candidates.empty(), path_, "has no triangle mesh",
+          "no skin: isokit-skin needs a mesh with a skeleton; export the character's mesh with its armature");
+  for (const MeshUse& m : candidates) skinned_ = skinned_ || m.mesh->mNumBones > 0;
+  for (MeshUse& m : candidates) {
+    if (skinned_ && m.mesh->mNumBones == 0) {
+      report_.warnings.push_back("mesh " + quote(m.name) +
+                                 " has no skin; skipped (only skinned meshes deform)");
+      continue;
+    }
+    meshes_.push_back(std::move(m));
+  }
+}
+
+void Loader::bind_pose() {
+  if (!skinned_) {
+    // A mesh and a skeleton without weights: the skeleton is the glTF skins' joints, or else the
+    // nodes that are neither meshes, cameras, lights nor ancestors of meshes, and that are
+    // animated or chained to another such node.
+    std::vector<int> skeleton;
+    for (const std::string& name : gltf_.skin_joint_names) {
+      const auto it = nodes_.by_name.find(name);
+      if (it != nodes_.by_name.end() && it->second.size() == 1) skeleton.push_back(it->second.front());
+    }
+    if (skeleton.empty()) {
+      const std::size_t n = nodes_.list.size();
+      std::vector<char> excluded(n, 0);
+      std::set<std::string> special;
+      for (unsigned c = 0; c < scene_->mNumCameras; ++c) special.insert(scene_->mCameras[c]->mName.C_Str());
+      for (unsigned l = 0; l < scene_->mNumLights; ++l) special.insert(scene_->mLights[l]->mName.C_Str());
+      for (std::size_t i = 0; i < n; ++i) {
+        const Node& nd = nodes_.list[i];
+        if (nd.ai->mNumMeshes > 0)
+          for (int p = static_cast<int>(i); p >= 0; p = nodes_.list[static_cast<std::size_t>(p)].parent)
+            excluded[static_cast<std::size_t>(p)] = 1;
+        if (special.count(nd.name) || nd.parent < 0) excluded[i] = 1;
+      }
+      std::set<std::string> animated;
+      for (unsigned a = 0; a < scene_->mNumAnimations; ++a)
+        for (unsigned c = 0; c < scene_->mAnimations[a]->mNumChannels; ++c)
+          animated.insert(scene_->mAnimations[a]->mChannels[c]->mNodeName.C_Str());
+      std::vector<char> chained(n, 0);
+      for (std::size_t i = 0; i < n; ++i) {
+        const int p = nodes_.list[i].parent;
+        if (!excluded[i] && p >= 0 && !excluded[static_cast<std::size_t>(p)])
+          chained[i] = chained[static_cast<std::size_t>(p)] = 1;
+      }
+      for (std::size_t i = 0; i < n; ++i)
+        if (!excluded[i] && (chained[i] || animated.count(nodes_.list[i].name)))
+          skeleton.push_back(static_cast<int>(i));
+    }
+    require(!skeleton.empty(), path_, "no skin: isokit-skin needs a mesh with a skeleton",
+            "export the character with its armature and skin weights (glTF: a skin on the mesh node)");
+    for (int node : skeleton) bind_world_[node] = nodes_.list[static_cast<std::size_t>(node)].world;
+    for (MeshUse& m : meshes_) m.to_scene = nodes_.list[static_cast<std::size_t>(m.node)].world;
+    report_.warnings.push_back(
+        "the file has no skin weights: loaded with empty weights (heat weights will be computed)");
+    return;
+  }
+  std::map<int, std::string> bind_source;
+  for (MeshUse& m : meshes_) {
+    const aiMesh* mesh = m.mesh;
+    std::vector<Affine> offsets(mesh->mNumBones);
+    int top = -1;
+    for (unsigned b = 0; b < mesh->mNumBones; ++b) {
+      const aiBone* bone = mesh->mBones[b];
+      const std::string what = path_ + ": mesh " + quote(m.name) + " bone " + quote(bone->mName.C_Str());
+      const int node = node_named(bone->mName.C_Str(), what);
+      m.bone_joint_node.push_back(node);
+      require(is_affine(bone->mOffsetMatrix), what, "inverse bind matrix is projective", "fix the bind pose");
+      offsets[b] = to_affine(bone->mOffsetMatrix);
+      require(offsets[b].matrix().allFinite(), what, "inverse bind matrix is not finite",
+              "fix the bind pose");
+      require(std::abs(offsets[b].linear().determinant()) > 1e-12, what, "inverse bind matrix is singular",
+              "fix the bind pose");
+      if (top < 0 ||
+          nodes_.list[static_cast<std::size_t>(node)].depth <
+              nodes_.list[static_cast<std::size_t>(m.bone_joint_node[static_cast<std::size_t>(top)])].depth)
+        top = static_cast<int>(b);
+    }
+    // The mesh's bind-shape transform: where its top bone's node is now, times its inverse bind.
+    const int top_node = m.bone_joint_node[static_cast<std::size_t>(top)];
+    m.to_scene =
+        nodes_.list[static_cast<std::size_t>(top_node)].world * offsets[static_cast<std::size_t>(top)];
+    // World times inverse bind is the identity up to the file's float rounding in the usual case
+    // (glTF, and FBX/COLLADA meshes at the scene origin): keep the file's positions bit-exact then.
+    const double length = nodes_.list[static_cast<std::size_t>(top_node)].world.translation().norm();
+    if (nearly_identity(m.to_scene, length)) m.to_scene = Affine::Identity();
+    for (unsigned b = 0; b < mesh->mNumBones; ++b) {
+      const int node = m.bone_joint_node[b];
+      const Affine world = m.to_scene * offsets[b].inverse(Eigen::Affine);
+      const auto it = bind_world_.find(node);
+      if (it == bind_world_.end()) {
+        bind_world_[node] = world;
+        bind_source[node] = m.name;
+      } else {
+        require(
+            nearly_equal(it->second, world),
+            path_ + ": joint " + quote(nodes_.list[static_cast<std::size_t>(node)].name),
+            "meshes " + quote(bind_source[node]) + " and " + quote(m.name) + " bind it at different poses",
+            "load one mesh (LoadOptions::mesh) or re-export the meshes with one bind pose");
+      }
+    }
+  }
+}
+
+void Loader::build_joints() {
+  const std::size_t n = nodes_.list.size();
+  std::vector<char> is_joint(n, 0);
+  for (const auto& [node, world] : bind_world_) is_joint[static_cast<std::size_t>(node)] = 1;
+  // Nodes between two bones join the skeleton; nodes above the top bones do not (their
+  // transform is folded into the root joints).
+  for (const auto& [node, world] : bind_world_) {
+    std::vector<int> between;
+    int p = nodes_.list[static_cast<std::size_t>(node)].parent;
+    while (p >= 0 && !bind_world_.count(p)) {
+      between.push_back(p);
+      p = nodes_.list[static_cast<std::size_t>(p)].parent;
+    }
+    if (p >= 0)
+      for (int b : between) is_joint[static_cast<std::size_t>(b)] = 1;
+  }
+  node_joint_.assign(n, -1);
+  std::vector<Affine> world_bind;
+  int pose_differs = 0;
+  std::string first_differs;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!is_joint[i]) continue;
+    const Node& nd = nodes_.list[i];
+    int parent = -1;
+    for (int p = nd.parent; p >= 0 && parent < 0; p = nodes_.list[static_cast<std::size_t>(p)].parent)
+      parent = node_joint_[static_cast<std::size_t>(p)];
+    Joint joint;
+    joint.name = nd.name;
+    joint.parent = parent;
+    Affine wb;
+    const auto it = bind_world_.find(static_cast<int>(i));
+    if (it != bind_world_.end()) {
+      wb = it->second;
+    } else {  // a node between bones: rigidly attached to its parent joint as in the node pose
+      const int pn = joint_node_[static_cast<std::size_t>(parent)];
+      wb = world_bind[static_cast<std::size_t>(parent)] *
+           (nodes_.list[static_cast<std::size_t>(pn)].world.inverse(Eigen::Affine) * nd.world);
+    }
+    if (!nearly_equal(wb, nd.world)) {
+      if (pose_differs++ == 0) first_differs = nd.name;
+    }
+    joint.rest_local =
+        parent < 0 ? wb : Affine(world_bind[static_cast<std::size_t>(parent)].inverse(Eigen::Affine) * wb);
+    joint.inverse_bind = wb.inverse(Eigen::Affine);
+    const std::string what = path_ + ": joint " + quote(nd.name);
+    require(joint.rest_local.matrix().allFinite() && joint.inverse_bind.matrix().allFinite(), what,
+            "bind transform is not finite", "fix the bind pose and export again");
+    require(!has_shear(joint.rest_local), what, "rest transform has shear (non-uniform scale under rotation)",
+            "apply the scale of the armature and its bones in the DCC tool and export again");
+    node_joint_[i] = static_cast<int>(rig_.joints.size());
+    joint_node_.push_back(static_cast<int>(i));
+    world_bind.push_back(wb);
+    rig_.joints.push_back(std::move(joint));
+  }
+  if (pose_differs > 0)
+    report_.warnings.push_back(
+        std::to_string(pose_differs) + " joint(s) (first " + quote(first_differs) +
+        ") are posed away from the bind pose in the file; the rest pose is the bind pose, "
+        "clips use the file's node transforms");
+}
+
+void Loader::build_mesh() {
+  const bool weights = skinned_ && !options_.ignore_weights;
+  std::vector<Eigen::Vector3f> out_pos;
+  std::vector<std::vector<std::pair<int, float>>> out_w;
+  std::vector<Eigen::Vector3i> out_tris;
+  rig_.output.primitive_offsets = {0};
+  for (const MeshUse& m : meshes_) {
+    const aiMesh* mesh = m.mesh;
+    std::vector<int> local_to_out(mesh->mNumVertices, -1);
+    for (unsigned f = 0; f < mesh->mNumFaces; ++f) {
+      const aiFace& face = mesh->mFaces[f];
+      if (face.mNumIndices != 3) continue;
+      Eigen::Vector3i t;
+      for (int k = 0; k < 3; ++k) {
+        const unsigned v = face.mIndices[k];
+        require(v < mesh->mNumVertices, path_ + ": mesh " + quote(m.name) + " face " + std::to_string(f),
+                "vertex index out of range", "fix the mesh");
+        if (local_to_out[v] < 0) {
+          const Eigen::Vector3d p =
+              m.to_scene * Eigen::Vector3d(mesh->mVertices[v].x, mesh->mVertices[v].y, mesh->mVertices[v].z);
+          require(p.allFinite(), path_ + ": mesh " + quote(m.name) + " vertex " + std::to_string(v),
+                  "position is not finite", "fix the mesh and export again");
+          local_to_out[v] = static_cast<int>(out_pos.size());
+          out_pos.push_back(p.cast<float>());
+        }
+        t[k] = local_to_out[v];
+      }
+      out_tris.push_back(t);
+    }
+    const int unused = static_cast<int>(std::count(local_to_out.begin(), local_to_out.end(), -1));
+    if (unused > 0)
+      report_.warnings.push_back("mesh " + quote(m.name) + ": " + std::to_string(unused) +
+                                 " vertices used by no triangle were dropped");
+    rig_.output.primitive_offsets.push_back(static_cast<int>(out_tris.size()));
+    out_w.resize(out_pos.size());
+    if (!weights) continue;
+    for (unsigned b = 0; b < mesh->mNumBones; ++b) {
+      const aiBone* bone = mesh->mBones[b];
+      const int joint = node_joint_[static_cast<std::size_t>(m.bone_joint_node[b])];
+      for (unsigned k = 0; k < bone->mNumWeights; ++k) {
+        const aiVertexWeight& vw = bone->mWeights[k];
+        const std::string what =
+            path_ + ": mesh " + quote(m.name) + " vertex " + std::to_string(vw.mVertexId);
+        require(vw.mVertexId < mesh->mNumVertices, what,
+                "bone " + quote(bone->mName.C_Str()) + " weights a missing vertex",
+                "fix the skin and export again");
+        require(std::isfinite(vw.mWeight) && vw.mWeight >= 0, what,
+                "weight of bone " + quote(bone->mName.C_Str()) + " is negative or not finite",
+                "fix the skin weights and export again");
+        const int o = local_to_out[vw.mVertexId];
+        if (o >= 0 && vw.mWeight > 0) out_w[static_cast<std::size_t>(o)].push_back({joint, vw.mWeight});
+      }
+    }
+    for (unsigned v = 0; v < mesh->mNumVertices; ++v) {
+      const int o = local_to_out[v];
+      require(
+          o < 0 || !out_w[static_cast<std::size_t>(o)].empty(),
+          path_ + ": mesh " + quote(m.name) + " vertex " + std::to_string(v), "has no skin weight",
+          "weight every vertex in the DCC tool, or set LoadOptions::ignore_weights to compute heat weights");
+    }
+  }
+  const std::size_t nout = out_pos.size();
+  // Weld.
+  double tolerance = 0;
+  if (options_.weld_tolerance > 0) {
+    Eigen::AlignedBox3f box;
+    for (const auto& p : out_pos) box.extend(p);
+    tolerance = options_.weld_tolerance * static_cast<double>(box.diagonal().norm());
+  }
+  rig_.output.to_welded = weld(out_pos, tolerance);
+  int nw = 0;
+  for (int id : rig_.output.to_welded) nw = std::max(nw, id + 1);
+  rig_.rest.resize(nw, 3);
+  std::vector<int> first(static_cast<std::size_t>(nw), -1);
+  for (std::size_t i = 0; i < nout; ++i) {
+    const auto w = static_cast<std::size_t>(rig_.output.to_welded[i]);
+    if (first[w] < 0) {
+      first[w] = static_cast<int>(i);
+      rig_.rest.row(static_cast<Eigen::Index>(w)) = out_pos[i].transpose();
+    }
+  }
+  rig_.output.triangles.resize(static_cast<Eigen::Index>(out_tris.size()), 3);
+  std::vector<Eigen::Vector3i> welded_tris;
+  for (std::size_t f = 0; f < out_tris.size(); ++f) {
+    rig_.output.triangles.row(static_cast<Eigen::Index>(f)) = out_tris[f].transpose();
+    Eigen::Vector3i t;
+    for (int k = 0; k < 3; ++k) t[k] = rig_.output.to_welded[static_cast<std::size_t>(out_tris[f][k])];
+    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2])
+      ++report_.dropped_triangles;
+    else
+      welded_tris.push_back(t);
+  }
+  rig_.triangles.resize(static_cast<Eigen::Index>(welded_tris.size()), 3);
+  for (std::size_t f = 0; f < welded_tris.size(); ++f)
+    rig_.triangles.row(static_cast<Eigen::Index>(f)) = welded_tris[f].transpose();
+  if (report_.dropped_triangles > 0)
+    report_.warnings.push_back(std::to_string(report_.dropped_triangles) +
+                               " triangle(s) collapse when welded; left out of the deformation mesh");
+  // Welded weights: the mean of the merged vertices' weights.
+  if (weights) {
+    std::vector<std::map<int, double>> acc(static_cast<std::size_t>(nw));
+    std::vector<int> members(static_cast<std::size_t>(nw), 0);
+    int disagree = 0;
+    auto as_map = [&](std::size_t i) {
+      std::map<int, double> m;
+      double sum = 0;
+      for (const auto& [j, x] : out_w[i]) sum += x;
+      for (const auto& [j, x] : out_w[i]) m[j] += x / sum;
+      return m;
+    };
+    for (std::size_t i = 0; i < nout; ++i) {
+      const auto w = static_cast<std::size_t>(rig_.output.to_welded[i]);
+      const std::map<int, double> m = as_map(i);
+      if (members[w] > 0) {
+        const std::map<int, double> ref = as_map(static_cast<std::size_t>(first[w]));
+        bool same = ref.size() == m.size();
+        for (auto a = ref.begin(), b = m.begin(); same && a != ref.end(); ++a, ++b)
+          same = a->first == b->first && std::abs(a->second - b->second) <= 1e-5;
+        if (!same) ++disagree;
+      }
+      for (const auto& [j, x] : m) acc[w][j] += x;
+      ++members[w];
+    }
+    if (disagree > 0)
+      report_.warnings.push_back(std::to_string(disagree) +
+                                 " welded vertex copies had different weights; their mean is used");
+    SkinWeights& sw = rig_.weights;
+    sw.offsets.assign(1, 0);
+    for (std::size_t w = 0; w < static_cast<std::size_t>(nw); ++w) {
+      for (const auto& [j, x] : acc[w]) {
+        sw.joints.push_back(j);
+        sw.weights.push_back(static_cast<float>(x / members[w]));
+      }
+      sw.offsets.push_back(static_cast<int>(sw.joints.size()));
+    }
+    normalize_weights(sw, nw, options_.min_weight, path_);
+    for (int v = 0; v < nw; ++v) report_.max_influences = std::max(report_.max_influences, sw.count(v));
+  }
+  report_.meshes = static_cast<int>(meshes_.size());
+  report_.file_vertices = static_cast<int>(nout);
+  report_.welded_vertices = nw;
+  report_.weights_from_file = weights;
+}
+
+void Loader::build_clips() {
+  if (!options_.clips) return;
+  const std::size_t n = nodes_.list.size();
+  // Nodes whose animated transform matters: the joints and every ancestor of a root joint.
+  std::vector<char> relevant(n, 0);
+  for (std::size_t j = 0; j < joint_node_.size(); ++j) {
+    int p = joint_node_[j];
+    relevant[static_cast<std::size_t>(p)] = 1;
+    if (rig_.joints[j].parent < 0)
+      for (p = nodes_.list[static_cast<std::size_t>(p)].parent; p >= 0;
+           p = nodes_.list[static_cast<std::size_t>(p)].parent)
+        relevant[static_cast<std::size_t>(p)] = 1;
+  }
+  std::vector<Trs> rest_trs(n);
+  for (std::size_t i = 0; i < n; ++i)
+    if (relevant[i]) rest_trs[i] = decompose(nodes_.list[i].local);
+  std::set<std::string> used_names;
+  for (unsigned a = 0; a < scene_->mNumAnimations; ++a) {
+    const aiAnimation* anim = scene_->mAnimations[a];
+    std::string name = anim->mName.length ? anim->mName.C_Str() : "animation_" + std::to_string(a);
+    if (used_names.count(name)) name += "_" + std::to_string(a);
+    used_names.insert(name);
+    const double tps = anim->mTicksPerSecond > 0 ? anim->mTicksPerSecond : 25.0;
+    std::vector<const aiNodeAnim*> channel(n, nullptr);
+    double last = 0;
+    bool any = false;
+    for (unsigned c = 0; c < anim->mNumChannels; ++c) {
+      const aiNodeAnim* ch = anim->mChannels[c];
+      const auto it = nodes_.by_name.find(ch->mNodeName.C_Str());
+      if (it == nodes_.by_name.end()) continue;
+      for (int node : it->second) {
+        if (!relevant[static_cast<std::size_t>(node)]) continue;
+        check_keys(ch, path_ + ": animation " + quote(name) + " channel " + quote(ch->mNodeName.C_Str()));
+        if (channel[static_cast<std::size_t>(node)] == nullptr) channel[static_cast<std::size_t>(node)] = ch;
+        last = std::max(last, last_key_time(ch) / tps);
+        any = true;
+      }
+    }
+    if (!any) {
+      report_.warnings.push_back("animation " + quote(name) + " moves no joint; skipped");
+      continue;
+    }
+    Clip clip;
+    clip.name = name;
+    clip.fps = options_.fps;
+    const int frames = static_cast<int>(std::ceil(last * options_.fps - 1e-3)) + 1;
+    std::vector<Affine> local(n, Affine::Identity());
+    std::vector<Affine> world(n, Affine::Identity());
+    for (int f = 0; f < std::max(frames, 1); ++f) {
+      const double ticks = std::min(f / options_.fps, last) * tps;
+      for (std::size_t i = 0; i < n; ++i) {
+        if (!relevant[i]) continue;
+        const aiNodeAnim* ch = channel[i];
+        if (ch == nullptr) {
+          local[i] = nodes_.list[i].local;
+        } else {
+          Trs x;
+          x.t = sample(ch->mPositionKeys, ch->mNumPositionKeys, ticks, rest_trs[i].t);
+          x.r = sample(ch->mRotationKeys, ch->mNumRotationKeys, ticks, rest_trs[i].r);
+          x.s = sample(ch->mScalingKeys, ch->mNumScalingKeys, ticks, rest_trs[i].s);
+          local[i] = compose(x);
+        }
+        const int p = nodes_.list[i].parent;
+        world[i] = p >= 0 && relevant[static_cast<std::size_t>(p)]
+                       ? Affine(world[static_cast<std::size_t>(p)] * local[i])
+                       : local[i];
+      }
+      std::vector<Affine> pose(joint_node_.size());
+      for (std::size_t j = 0; j < joint_node_.size(); ++j) {
+        const auto node = static_cast<std::size_t>(joint_node_[j]);
+        const int pj = rig_.joints[j].parent;
+        if (pj < 0)
+          pose[j] = world[node];
+        else if (nodes_.list[node].parent == joint_node_[static_cast<std::size_t>(pj)])
+          pose[j] = local[node];
+        else
+          pose[j] = world[static_cast<std::size_t>(joint_node_[static_cast<std::size_t>(pj)])].inverse(
+                        Eigen::Affine) *
+                    world[node];
+      }
+      clip.local.push_back(std::move(pose));
+    }
+    rig_.clips.push_back(std::move(clip));
+  }
+}
+
+Rig Loader::load() {
+  rig_.name = path_;
+  require(options_.fps > 0 && std::isfinite(options_.fps), path_ + ": LoadOptions::fps",
+          "must be > 0 (got " + format_number(options_.fps) + ")", "pass a positive frame rate such as 30");
+  require(options_.weld_tolerance >= 0 && std::isfinite(options_.weld_tolerance),
+          path_ + ": LoadOptions::weld_tolerance",
+          "must be >= 0 (got " + format_number(options_.weld_tolerance) + ")", "pass 0 for exact welding");
+  std::error_code ec;
+  require(fs::exists(path_, ec), path_, "file does not exist", "check the path");
+  require(fs::is_regular_file(path_, ec), path_, "is not a regular file", "give the path of a rig file");
+  const std::string ext = gltf::extension(path_);
+  report_.format = ext.empty() ? std::string() : ext.substr(1);
+  if (ext == ".gltf" || ext == ".glb") {
+    try {
+      gltf_ = check_gltf(path_, report_);
+    } catch (const json::exception& e) {
+      throw InputError(path_ + ": glTF: " + e.what() + "; fix the file or export it again");
+    }
+  }
+
+  importer_.SetPropertyBool(AI_CONFIG_IMPORT_FBX_PRESERVE_PIVOTS, false);
+  try {
+    auto read = [&](const std::string& file) {
+      scene_ = importer_.ReadFile(file, aiProcess_Triangulate | aiProcess_ValidateDataStructure);
+      const std::string error = importer_.GetErrorString();
+      if (scene_ == nullptr && error.rfind("Validation failed", 0) == 0) {
+        // assimp's own consistency check is stricter than the rig needs (e.g. key times past the
+        // animation's declared duration); the loader checks what it uses itself.
+        scene_ = importer_.ReadFile(file, aiProcess_Triangulate);
+        if (scene_ != nullptr)
+          report_.warnings.push_back("assimp: " + error + " (loaded without that check)");
+      }
+    };
+    if (gltf_.patched.empty()) {
+      read(path_);
+    } else {
+      std::random_device rd;
+      const fs::path dir =
+          fs::temp_directory_path() / ("isokit-gltf-" + std::to_string(rd()) + std::to_string(rd()));
+      fs::create_directories(dir);
+      struct Cleanup {
+        fs::path dir;
+        ~Cleanup() {
+          std::error_code ignored;
+          fs::remove_all(dir, ignored);
+        }
+      } cleanup{dir};
+      const std::string copy = (dir / "patched.gltf").string();
+      gltf::write_file_atomic(copy, [&](std::ostream& out) { out << gltf_.patched; });
+      read(copy);
+    }
+  } catch (const InputError&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw InputError(path_ + ": assimp failed: " + e.what() +
+                     "; check that it is a valid glTF 2.0, FBX or COLLADA file");
+  }
+  require(scene_ != nullptr && scene_->mRootNode != nullptr, path_,
+          std::string("assimp cannot read it: ") + importer_.GetErrorString(),
+          "check that it is a valid glTF 2.0, FBX or COLLADA file (export it again)");
+  require(!(scene_->mFlags & AI_SCENE_FLAGS_INCOMPLETE), path_, "assimp read an incomplete scene",
+          "export the file again with its meshes");
+  nodes_ = collect_nodes(scene_, path_);
+  select_meshes();
+  bind_pose();
+  build_joints();
+  build_mesh();
+  build_clips();
+  validate(rig_);
+  return std::move(rig_);
+}
+
+}  // namespace
+
+Rig load_rig(const std::string& path, const LoadOptions& options, LoadReport* report) {
+  LoadReport local;
+  LoadReport& r = report ? *report : local;
+  r = LoadReport{};
+  Loader loader(path, options, r);
+  return loader.load();
+}
+
+}  // namespace isokit::skinning

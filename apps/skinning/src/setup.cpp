@@ -1,0 +1,205 @@
+// SPDX-License-Identifier: MIT
+#include "isokit/skinning/setup.h"
+
+#include <cmath>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "isokit/core/error.h"
+
+namespace isokit::skinning {
+
+const char* to_string(JointOperator op) {
+  switch (op) {
+    case JointOperator::kUnion:
+      return "union";
+    case JointOperator::kBlend:
+      return "blend";
+    case JointOperator::kBulge:
+      return "bulge";
+    case JointOperator::kContact:
+      return "contact";
+    case JointOperator::kAuto:
+      break;
+  }
+  return "auto";
+}
+
+JointOperator joint_operator_from_string(const std::string& s, const std::string& where) {
+  for (JointOperator op : {JointOperator::kAuto, JointOperator::kUnion, JointOperator::kBlend,
+                           JointOperator::kBulge, JointOperator::kContact})
+    if (s == to_string(op)) return op;
+  throw InputError(where + ": unknown operator '" + s + "'; use auto, union, blend, bulge or contact");
+}
+
+JointOperator SkinSetup::operator_for(const std::string& joint, TreeKind t) const {
+  auto it = joints.find(joint);
+  JointOperator op = it != joints.end() ? it->second.op : JointOperator::kAuto;
+  if (op == JointOperator::kAuto) op = default_operator;
+  if (op == JointOperator::kAuto) op = t == TreeKind::k2013 ? JointOperator::kBlend : JointOperator::kContact;
+  return op;
+}
+
+float SkinSetup::relaxation_for(const std::string& joint) const {
+  auto it = joints.find(joint);
+  return it != joints.end() ? it->second.relaxation : 1.0f;
+}
+
+namespace {
+
+using nlohmann::json;
+
+template <class T>
+void read(const json& obj, const char* key, T& out, const std::string& where) {
+  if (!obj.contains(key)) return;
+  try {
+    out = obj.at(key).get<T>();
+  } catch (const json::exception&) {
+    throw InputError(where + "." + key + ": wrong type (" + obj.at(key).dump() +
+                     "); see the setup format in docs/skinning.md");
+  }
+}
+
+void check_keys(const json& obj, std::initializer_list<const char*> keys, const std::string& where) {
+  require(obj.is_object(), where, "must be a JSON object", "see the setup format in docs/skinning.md");
+  for (auto it = obj.begin(); it != obj.end(); ++it) {
+    bool known = false;
+    std::string list;
+    for (const char* k : keys) {
+      known = known || it.key() == k;
+      list += std::string(list.empty() ? "" : ", ") + k;
+    }
+    require(known, where + "." + it.key(), "unknown key", "valid keys: " + list);
+  }
+}
+
+}  // namespace
+
+SkinSetup setup_from_json(const std::string& text, const std::string& source) {
+  json j;
+  try {
+    j = json::parse(text);
+  } catch (const json::parse_error& e) {
+    throw InputError(source + ": not valid JSON (" + e.what() + "); fix the file");
+  }
+  SkinSetup s;
+  s.source = source;
+  check_keys(j,
+             {"version", "tree", "default_operator", "joints", "fit", "operators", "tracker", "projector",
+              "substeps"},
+             source);
+  int version = 1;
+  read(j, "version", version, source);
+  require(version == 1, source + ".version", "unsupported (got " + std::to_string(version) + ")",
+          "use version 1");
+  std::string tree = "auto";
+  read(j, "tree", tree, source);
+  if (tree == "2013")
+    s.tree = TreeKind::k2013;
+  else if (tree == "2014")
+    s.tree = TreeKind::k2014;
+  else
+    require(tree == "auto", source + ".tree", "unknown tree '" + tree + "'", "use auto, 2013 or 2014");
+  std::string def = "auto";
+  read(j, "default_operator", def, source);
+  s.default_operator = joint_operator_from_string(def, source + ".default_operator");
+  if (j.contains("joints")) {
+    const json& js = j.at("joints");
+    require(js.is_object(), source + ".joints", "must be an object keyed by joint name",
+            "see docs/skinning.md");
+    for (auto it = js.begin(); it != js.end(); ++it) {
+      const std::string w = source + ".joints." + it.key();
+      check_keys(it.value(), {"operator", "relaxation"}, w);
+      JointSettings js_;
+      std::string op = "auto";
+      read(it.value(), "operator", op, w);
+      js_.op = joint_operator_from_string(op, w + ".operator");
+      read(it.value(), "relaxation", js_.relaxation, w);
+      require(js_.relaxation >= 0 && js_.relaxation <= 1, w + ".relaxation",
+              "must be in [0, 1] (got " + format_number(js_.relaxation) + ")",
+              "0 = no tangential move, 1 = full");
+      s.joints[it.key()] = js_;
+    }
+  }
+  if (j.contains("fit")) {
+    const json& f = j.at("fit");
+    const std::string w = source + ".fit";
+    check_keys(f, {"samples", "cull_h", "grid_resolution", "seed", "grid"}, w);
+    read(f, "samples", s.fit.target_samples, w);
+    read(f, "cull_h", s.fit.cull_h, w);
+    read(f, "grid_resolution", s.fit.grid_resolution, w);
+    read(f, "seed", s.fit.seed, w);
+    read(f, "grid", s.fit.sample_grid, w);
+    require(s.fit.target_samples >= 4 && s.fit.target_samples <= 2000, w + ".samples", "must be in [4, 2000]",
+            "the paper uses 50");
+    require(s.fit.grid_resolution >= 4 && s.fit.grid_resolution <= 256, w + ".grid_resolution",
+            "must be in [4, 256]", "the paper uses 32");
+  }
+  if (j.contains("operators")) {
+    const json& o = j.at("operators");
+    const std::string w = source + ".operators";
+    check_keys(o, {"resolution", "slices"}, w);
+    read(o, "resolution", s.operator_resolution, w);
+    read(o, "slices", s.operator_slices, w);
+    require(s.operator_resolution >= 8 && s.operator_resolution <= 1024, w + ".resolution",
+            "must be in [8, 1024]", "the paper uses 128");
+    require(s.operator_slices >= 8 && s.operator_slices <= 1024, w + ".slices", "must be in [8, 1024]",
+            "the paper uses 128");
+  }
+  if (j.contains("tracker")) {
+    const json& t = j.at("tracker");
+    const std::string w = source + ".tracker";
+    check_keys(t,
+               {"max_iterations", "tolerance", "sigma", "contact_angle_deg", "initial_newton_steps",
+                "smoothing_steps", "beta_diffusion_steps", "angle_contacts"},
+               w);
+    read(t, "max_iterations", s.tracker.max_iterations, w);
+    read(t, "tolerance", s.tracker.tolerance, w);
+    read(t, "sigma", s.tracker.sigma, w);
+    read(t, "contact_angle_deg", s.tracker.contact_angle_deg, w);
+    read(t, "initial_newton_steps", s.tracker.initial_newton_steps, w);
+    read(t, "smoothing_steps", s.tracker.smoothing.smoothing_steps, w);
+    read(t, "beta_diffusion_steps", s.tracker.smoothing.beta_diffusion_steps, w);
+    read(t, "angle_contacts", s.tracker.angle_contacts, w);
+  }
+  if (j.contains("projector")) {
+    const json& p = j.at("projector");
+    const std::string w = source + ".projector";
+    check_keys(p,
+               {"sigma", "max_iterations", "contact_angle_deg", "tolerance", "smoothing_steps",
+                "beta_diffusion_steps"},
+               w);
+    read(p, "sigma", s.projector.sigma, w);
+    read(p, "max_iterations", s.projector.max_iterations, w);
+    read(p, "contact_angle_deg", s.projector.contact_angle_deg, w);
+    read(p, "tolerance", s.projector.tolerance, w);
+    read(p, "smoothing_steps", s.projector.smoothing.smoothing_steps, w);
+    read(p, "beta_diffusion_steps", s.projector.smoothing.beta_diffusion_steps, w);
+  }
+  if (j.contains("substeps")) {
+    const json& p = j.at("substeps");
+    const std::string w = source + ".substeps";
+    check_keys(p, {"paper_rule", "min_step_rad", "max_step_rad", "max_substeps"}, w);
+    read(p, "paper_rule", s.substeps.paper_rule, w);
+    read(p, "min_step_rad", s.substeps.min_step_rad, w);
+    read(p, "max_step_rad", s.substeps.max_step_rad, w);
+    read(p, "max_substeps", s.substeps.max_substeps, w);
+    require(s.substeps.min_step_rad > 0 && std::isfinite(s.substeps.min_step_rad), w + ".min_step_rad",
+            "must be > 0", "e.g. 0.05");
+    require(s.substeps.max_step_rad >= 0 && std::isfinite(s.substeps.max_step_rad), w + ".max_step_rad",
+            "must be >= 0 (0 = off)", "e.g. 0.05");
+    require(s.substeps.max_substeps >= 1, w + ".max_substeps", "must be >= 1", "e.g. 1000");
+  }
+  return s;
+}
+
+SkinSetup load_setup(const std::string& path) {
+  std::ifstream in(path);
+  require(bool(in), path, "cannot be read", "check the setup file path");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return setup_from_json(ss.str(), path);
+}
+
+}  // namespace isokit::skinning

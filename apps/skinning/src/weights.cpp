@@ -1,0 +1,313 @@
+// SPDX-License-Identifier: MIT
+#include "isokit/skinning/weights.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <utility>
+
+#include <Eigen/SparseCore>
+
+#include "isokit/core/error.h"
+
+#ifdef ISOKIT_HAVE_CHOLMOD
+#include <Eigen/CholmodSupport>
+#else
+#include <Eigen/SparseCholesky>
+#endif
+
+namespace isokit::skinning {
+namespace {
+
+using SpMat = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
+
+constexpr double kMaxCot = 1e3;         // cotangent clamp (angles above ~0.06°)
+constexpr double kTieTolerance = 1e-9;  // relative distance tolerance for shared nearest bones
+constexpr double kMinDistanceRatio = 1e-4;
+constexpr double kMassFloor = 1e-6;
+constexpr int kBlock = 8;  // right-hand sides per solve call
+
+/// The factorisation of the SPD heat matrix: CHOLMOD when available, else SimplicialLDLT.
+class SpdSolver {
+ public:
+  explicit SpdSolver(const SpMat& a, const std::string& name) {
+#ifdef ISOKIT_HAVE_CHOLMOD
+    solver_.setMode(Eigen::CholmodAuto);
+#endif
+    solver_.compute(a);
+    require(solver_.info() == Eigen::Success, name + ": heat weights",
+            "the heat system is not positive definite",
+            "check the mesh for degenerate or duplicated triangles");
+  }
+  Eigen::MatrixXd solve(const Eigen::MatrixXd& b) const {
+    return solver_.solve(b);
+  }
+
+ private:
+#ifdef ISOKIT_HAVE_CHOLMOD
+  mutable Eigen::CholmodDecomposition<SpMat, Eigen::Lower> solver_;
+#else
+  Eigen::SimplicialLDLT<SpMat, Eigen::Lower> solver_;
+#endif
+};
+
+double corner_cot(const Eigen::Vector3d& u, const Eigen::Vector3d& v) {
+  const double s = u.cross(v).norm();
+  const double c = u.dot(v);
+  if (!(s > 0)) return c > 0 ? kMaxCot : 0.0;
+  return std::clamp(c / s, 0.0, kMaxCot);
+}
+
+}  // namespace
+
+double segment_distance(const Eigen::Vector3d& p, const Segment& s) {
+  const Eigen::Vector3d ab = s.b - s.a;
+  const double len2 = ab.squaredNorm();
+  if (!(len2 > 0)) return (p - s.a).norm();
+  const double t = std::clamp((p - s.a).dot(ab) / len2, 0.0, 1.0);
+  return (p - (s.a + t * ab)).norm();
+}
+
+std::vector<std::vector<Segment>> joint_segments(const Rig& rig, double leaf_fraction) {
+  require(leaf_fraction > 0 && std::isfinite(leaf_fraction), rig.name + ": joint segments",
+          "leaf_fraction must be > 0", "pass e.g. 0.5");
+  const std::vector<Eigen::Vector3d> pos = rest_joint_positions(rig);
+  const std::size_t nj = pos.size();
+  double extent = 0;
+  for (const auto& p : pos)
+    for (const auto& q : pos) extent = std::max(extent, (p - q).norm());
+  const double tiny = 1e-9 * std::max(extent, 1e-12);
+  std::vector<std::vector<Segment>> seg(nj);
+  for (std::size_t c = 0; c < nj; ++c) {
+    const int p = rig.joints[c].parent;
+    if (p >= 0 && (pos[c] - pos[static_cast<std::size_t>(p)]).norm() > tiny)
+      seg[static_cast<std::size_t>(p)].push_back({pos[static_cast<std::size_t>(p)], pos[c]});
+  }
+  for (std::size_t j = 0; j < nj; ++j) {
+    if (!seg[j].empty()) continue;
+    int a = rig.joints[j].parent;
+    while (a >= 0 && (pos[j] - pos[static_cast<std::size_t>(a)]).norm() <= tiny) a = rig.joints[a].parent;
+    if (a < 0) {
+      seg[j].push_back({pos[j], pos[j]});
+      continue;
+    }
+    const Eigen::Vector3d bone = pos[j] - pos[static_cast<std::size_t>(a)];
+    seg[j].push_back({pos[j], pos[j] + leaf_fraction * bone});
+  }
+  return seg;
+}
+
+SkinWeights heat_weights(const track::Positions& rest, const track::Triangles& tris,
+                         const std::vector<std::vector<Segment>>& segments_per_joint,
+                         const HeatWeightOptions& options) {
+  const std::string& name = options.name;
+  const int nv = static_cast<int>(rest.rows());
+  const int nf = static_cast<int>(tris.rows());
+  const int nj = static_cast<int>(segments_per_joint.size());
+  require(nv > 0, name + ": heat weights", "the mesh has no vertices", "give a triangle mesh");
+  require(nf > 0, name + ": heat weights", "the mesh has no triangles",
+          "give a triangle mesh (heat weights diffuse over triangles)");
+  require(options.heat_constant > 0 && std::isfinite(options.heat_constant), name + ": heat weights",
+          "heat_constant must be > 0 (got " + format_number(options.heat_constant) + ")",
+          "use the default 1");
+  require(options.min_weight >= 0 && options.min_weight < 1, name + ": heat weights",
+          "min_weight must lie in [0, 1) (got " + format_number(options.min_weight) + ")", "use e.g. 0.01");
+  for (int v = 0; v < nv; ++v)
+    require(rest.row(v).allFinite(), name + ": vertex " + std::to_string(v), "position is not finite",
+            "fix or remove the vertex");
+  for (int f = 0; f < nf; ++f)
+    for (int k = 0; k < 3; ++k)
+      require(tris(f, k) >= 0 && tris(f, k) < nv, name + ": triangle " + std::to_string(f),
+              "vertex index out of range (got " + std::to_string(tris(f, k)) + ")",
+              "indices must lie in [0, " + std::to_string(nv) + ")");
+
+  // Active bones.
+  std::vector<char> excluded(static_cast<std::size_t>(nj), 0);
+  for (int j : options.excluded_joints) {
+    require(j >= 0 && j < nj, name + ": heat weights",
+            "excluded joint " + std::to_string(j) + " does not exist",
+            "exclude joints in [0, " + std::to_string(nj) + ")");
+    excluded[static_cast<std::size_t>(j)] = 1;
+  }
+  std::vector<std::pair<int, Segment>> bones;
+  for (int j = 0; j < nj; ++j) {
+    if (excluded[static_cast<std::size_t>(j)]) continue;
+    for (const Segment& s : segments_per_joint[static_cast<std::size_t>(j)]) {
+      require(s.a.allFinite() && s.b.allFinite(), name + ": bone segment of joint " + std::to_string(j),
+              "is not finite", "fix the joint positions");
+      bones.emplace_back(j, s);
+    }
+  }
+  require(!bones.empty(), name + ": heat weights", "no joint has a bone segment",
+          "give at least one joint that is not excluded a segment");
+
+  // Nearest bone(s) per vertex.
+  const Eigen::Vector3d lo = rest.colwise().minCoeff().cast<double>().transpose();
+  const Eigen::Vector3d hi = rest.colwise().maxCoeff().cast<double>().transpose();
+  const double eps = kMinDistanceRatio * std::max((hi - lo).norm(), 1e-12);
+  std::vector<double> heat(static_cast<std::size_t>(nv));
+  std::vector<int> near_offsets(static_cast<std::size_t>(nv) + 1, 0);
+  std::vector<int> near_joints;
+  std::vector<double> dist(bones.size());
+  for (int v = 0; v < nv; ++v) {
+    const Eigen::Vector3d p = rest.row(v).cast<double>().transpose();
+    double best = std::numeric_limits<double>::infinity();
+    for (std::size_t b = 0; b < bones.size(); ++b) {
+      dist[b] = segment_distance(p, bones[b].second);
+      best = std::min(best, dist[b]);
+    }
+    const std::size_t first = near_joints.size();
+    for (std::size_t b = 0; b < bones.size(); ++b)
+      if (dist[b] <= best * (1 + kTieTolerance) + 1e-300 &&
+          std::find(near_joints.begin() + static_cast<std::ptrdiff_t>(first), near_joints.end(),
+                    bones[b].first) == near_joints.end())
+        near_joints.push_back(bones[b].first);
+    std::sort(near_joints.begin() + static_cast<std::ptrdiff_t>(first), near_joints.end());
+    near_offsets[static_cast<std::size_t>(v) + 1] = static_cast<int>(near_joints.size());
+    const double d = std::max(best, eps);
+    heat[static_cast<std::size_t>(v)] = options.heat_constant / (d * d);
+  }
+
+  // Cotangent Laplacian (clamped) and lumped mass.
+  std::vector<double> mass(static_cast<std::size_t>(nv), 0.0);
+  std::vector<Eigen::Triplet<double, int>> trip;
+  trip.reserve(static_cast<std::size_t>(nf) * 9);
+  for (int f = 0; f < nf; ++f) {
+    const int idx[3] = {tris(f, 0), tris(f, 1), tris(f, 2)};
+    const Eigen::Vector3d x[3] = {rest.row(idx[0]).cast<double>().transpose(),
+                                  rest.row(idx[1]).cast<double>().transpose(),
+                                  rest.row(idx[2]).cast<double>().transpose()};
+    const double area = 0.5 * (x[1] - x[0]).cross(x[2] - x[0]).norm();
+    for (int k = 0; k < 3; ++k) {
+      mass[static_cast<std::size_t>(idx[k])] += area / 3;
+      const int i = idx[(k + 1) % 3], j = idx[(k + 2) % 3];
+      if (i == j) continue;
+      const double w = 0.5 * corner_cot(x[(k + 1) % 3] - x[k], x[(k + 2) % 3] - x[k]);
+      trip.emplace_back(i, j, -w);
+      trip.emplace_back(j, i, -w);
+      trip.emplace_back(i, i, w);
+      trip.emplace_back(j, j, w);
+    }
+  }
+  // Vertices used by no triangle are left out of the system (their weights are p).
+  std::vector<char> used(static_cast<std::size_t>(nv), 0);
+  for (int f = 0; f < nf; ++f)
+    for (int k = 0; k < 3; ++k) used[static_cast<std::size_t>(tris(f, k))] = 1;
+  std::vector<int> row(static_cast<std::size_t>(nv), -1);
+  int n = 0;
+  double mean_mass = 0;
+  for (int v = 0; v < nv; ++v)
+    if (used[static_cast<std::size_t>(v)]) {
+      row[static_cast<std::size_t>(v)] = n++;
+      mean_mass += mass[static_cast<std::size_t>(v)];
+    }
+  mean_mass /= n;
+  for (auto& t : trip) t = Eigen::Triplet<double, int>(row[t.row()], row[t.col()], t.value());
+  for (int v = 0; v < nv; ++v)
+    if (used[static_cast<std::size_t>(v)]) {
+      double& m = mass[static_cast<std::size_t>(v)];
+      m = std::max(m, kMassFloor * std::max(mean_mass, 1e-300));
+      trip.emplace_back(row[static_cast<std::size_t>(v)], row[static_cast<std::size_t>(v)],
+                        m * heat[static_cast<std::size_t>(v)]);
+    }
+  SpMat a(n, n);
+  a.setFromTriplets(trip.begin(), trip.end());
+  trip.clear();
+  trip.shrink_to_fit();
+  const SpdSolver solver(a, name);
+
+  // Which joints are nearest somewhere (the others get w = 0 without a solve).
+  std::vector<int> solve_joints;
+  {
+    std::vector<char> seen(static_cast<std::size_t>(nj), 0);
+    for (int j : near_joints) seen[static_cast<std::size_t>(j)] = 1;
+    for (int j = 0; j < nj; ++j)
+      if (seen[static_cast<std::size_t>(j)]) solve_joints.push_back(j);
+  }
+  // Per-vertex accumulated (joint, weight) candidates.
+  std::vector<std::vector<std::pair<int, float>>> acc(static_cast<std::size_t>(nv));
+  for (int v = 0; v < nv; ++v)
+    if (!used[static_cast<std::size_t>(v)]) {
+      const int k0 = near_offsets[static_cast<std::size_t>(v)],
+                k1 = near_offsets[static_cast<std::size_t>(v) + 1];
+      for (int k = k0; k < k1; ++k)
+        acc[static_cast<std::size_t>(v)].emplace_back(near_joints[static_cast<std::size_t>(k)],
+                                                      1.0f / static_cast<float>(k1 - k0));
+    }
+  const int total = static_cast<int>(solve_joints.size());
+  for (int start = 0; start < total; start += kBlock) {
+    const int cols = std::min(kBlock, total - start);
+    Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(n, cols);
+    for (int v = 0; v < nv; ++v) {
+      const int r = row[static_cast<std::size_t>(v)];
+      if (r < 0) continue;
+      const int k0 = near_offsets[static_cast<std::size_t>(v)],
+                k1 = near_offsets[static_cast<std::size_t>(v) + 1];
+      for (int k = k0; k < k1; ++k) {
+        const int j = near_joints[static_cast<std::size_t>(k)];
+        for (int c = 0; c < cols; ++c)
+          if (solve_joints[static_cast<std::size_t>(start + c)] == j)
+            rhs(r, c) = mass[static_cast<std::size_t>(v)] * heat[static_cast<std::size_t>(v)] / (k1 - k0);
+      }
+    }
+    const Eigen::MatrixXd w = solver.solve(rhs);
+    for (int v = 0; v < nv; ++v) {
+      const int r = row[static_cast<std::size_t>(v)];
+      if (r < 0) continue;
+      for (int c = 0; c < cols; ++c) {
+        const double x = w(r, c);
+        require(std::isfinite(x), name + ": heat weights of vertex " + std::to_string(v), "are not finite",
+                "check the mesh for degenerate triangles");
+        if (x > 1e-7)
+          acc[static_cast<std::size_t>(v)].emplace_back(solve_joints[static_cast<std::size_t>(start + c)],
+                                                        static_cast<float>(x));
+      }
+    }
+    if (options.progress) options.progress(start + cols, total);
+  }
+
+  // Clamp, prune relative to the vertex's sum (always keep the largest), renormalise.
+  SkinWeights out;
+  out.offsets.reserve(static_cast<std::size_t>(nv) + 1);
+  out.offsets.push_back(0);
+  for (int v = 0; v < nv; ++v) {
+    auto& list = acc[static_cast<std::size_t>(v)];
+    std::sort(list.begin(), list.end());
+    double sum = 0;
+    float best = -1;
+    int best_j = -1;
+    for (const auto& [j, x] : list) {
+      sum += x;
+      if (x > best) {
+        best = x;
+        best_j = j;
+      }
+    }
+    if (!(sum > 0)) {
+      // Underflow far from every bone (cannot happen with H > 0 everywhere): nearest bone.
+      best_j = near_joints[static_cast<std::size_t>(near_offsets[static_cast<std::size_t>(v)])];
+      list.assign(1, {best_j, 1.0f});
+      sum = 1;
+    }
+    double kept = 0;
+    for (const auto& [j, x] : list)
+      if (x >= options.min_weight * sum || j == best_j) kept += x;
+    for (const auto& [j, x] : list)
+      if (x >= options.min_weight * sum || j == best_j) {
+        out.joints.push_back(j);
+        out.weights.push_back(static_cast<float>(x / kept));
+      }
+    out.offsets.push_back(static_cast<int>(out.joints.size()));
+    list.clear();
+    list.shrink_to_fit();
+  }
+  return out;
+}
+
+SkinWeights heat_weights(const Rig& rig, HeatWeightOptions options) {
+  options.name = rig.name;
+  return heat_weights(rig.rest, rig.triangles, joint_segments(rig), options);
+}
+
+}  // namespace isokit::skinning

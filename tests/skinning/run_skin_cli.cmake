@@ -1,0 +1,75 @@
+# isokit-skin end to end (CTest skin:cli). Checks files and JSON contents, not pictures.
+file(REMOVE_RECURSE "${OUT}")
+function(run)
+  execute_process(COMMAND "${EXE}" ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "isokit-skin ${ARGN} failed (${rc}):\n${out}\n${err}")
+  endif()
+  set(LAST_OUT "${out}" PARENT_SCOPE)
+endfunction()
+function(expect_png path)
+  if(NOT EXISTS "${path}")
+    message(FATAL_ERROR "missing ${path}")
+  endif()
+  file(READ "${path}" magic LIMIT 4 HEX)
+  if(NOT magic STREQUAL "89504e47")
+    message(FATAL_ERROR "${path} is not a PNG")
+  endif()
+endfunction()
+
+# info on a procedural rig lists its joints.
+run(info "procedural:finger?vertices=1500")
+if(NOT LAST_OUT MATCHES "Finger3")
+  message(FATAL_ERROR "info does not list the joints:\n${LAST_OUT}")
+endif()
+
+# bake with every output on the cylinder.
+run(bake procedural:cylinder --method tracking2014 --bend Bone1:x:120 --frames 9 --compare
+    --out "${OUT}/cyl/out.glb" --metrics "${OUT}/cyl/metrics.json" --render "${OUT}/cyl/render"
+    --ply "${OUT}/cyl/ply")
+foreach(f cyl/out.glb cyl/metrics.json cyl/ply/frame_0000.ply cyl/ply/frame_0008.ply)
+  if(NOT EXISTS "${OUT}/${f}")
+    message(FATAL_ERROR "bake did not write ${f}")
+  endif()
+endforeach()
+expect_png("${OUT}/cyl/render/contact_sheet.png")
+file(READ "${OUT}/cyl/out.glb" magic LIMIT 4 HEX)
+if(NOT magic STREQUAL "676c5446")
+  message(FATAL_ERROR "out.glb is not a binary glTF")
+endif()
+file(READ "${OUT}/cyl/metrics.json" json)
+foreach(m lbs dqs implicit2013 tracking2014)
+  string(JSON n LENGTH "${json}" methods ${m} frames)
+  if(NOT n EQUAL 9)
+    message(FATAL_ERROR "metrics.json: ${m} has ${n} frames, expected 9")
+  endif()
+endforeach()
+string(JSON inv GET "${json}" methods tracking2014 worst new_inverted_triangles)
+string(JSON rec GET "${json}" methods tracking2014 rest_recovery)
+message(STATUS "cylinder 120 deg tracking2014: new inverted ${inv}, rest recovery ${rec}")
+
+# demo on a small humanoid: every output of `make demo`.
+run(demo --out "${OUT}/demo" --vertices 4000 --frames 7)
+expect_png("${OUT}/demo/contact_sheet.png")
+foreach(f tracking2014.glb metrics.json)
+  if(NOT EXISTS "${OUT}/demo/${f}")
+    message(FATAL_ERROR "demo did not write ${f}")
+  endif()
+endforeach()
+if(NOT LAST_OUT MATCHES "tracking2014" OR NOT LAST_OUT MATCHES "implicit2013")
+  message(FATAL_ERROR "demo did not print its table:\n${LAST_OUT}")
+endif()
+
+# Bad input: clear message, exit code 2, no output file.
+foreach(args "bake;procedural:cylinder;--bend;Elbow:x:90;--out;${OUT}/bad.glb"
+             "bake;procedural:nothing;--bend;Bone1:x:90;--out;${OUT}/bad.glb"
+             "bake;${OUT}/missing.glb;--bend;0:x:90;--out;${OUT}/bad.glb"
+             "bake;procedural:cylinder;--bend;Bone1:x:90;--method;magic;--out;${OUT}/bad.glb")
+  execute_process(COMMAND "${EXE}" ${args} RESULT_VARIABLE rc OUTPUT_VARIABLE o ERROR_VARIABLE e)
+  if(NOT rc EQUAL 2 OR NOT e MATCHES "error")
+    message(FATAL_ERROR "isokit-skin ${args}: expected exit 2 with an error message, got ${rc}:\n${e}")
+  endif()
+  if(EXISTS "${OUT}/bad.glb")
+    message(FATAL_ERROR "isokit-skin ${args} wrote an output despite the error")
+  endif()
+endforeach()

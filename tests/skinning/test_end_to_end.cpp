@@ -1,0 +1,109 @@
+// SPDX-License-Identifier: MIT
+// End-to-end properties on the built-in procedural rigs (issue 6 "must show").
+#include <catch2/catch.hpp>
+
+#include <array>
+#include <cstdio>
+#include <map>
+
+#include "isokit/skinning/animation.h"
+#include "isokit/skinning/pipeline.h"
+#include "isokit/skinning/procedural.h"
+#include "isokit/skinning/rig_io.h"
+#include "isokit/skinning/weights.h"
+
+using namespace isokit::skinning;
+
+namespace {
+SkinSetup fast_setup() {
+  SkinSetup setup;
+  setup.operator_resolution = 64;
+  setup.operator_slices = 32;
+  return setup;
+}
+}  // namespace
+
+TEST_CASE("e2e: a rig with no weights gets heat weights and still skins", "[skinning][e2e][slow]") {
+  Rig r = make_cylinder();
+  r.weights = {};
+  r.weights = heat_weights(r);
+  validate(r);
+  Skinner sk(r, fast_setup());
+  const auto poses = bend_animation(sk.rig(), {parse_bend("Bone1:x:90", sk.rig())}, 5);
+  BakeOptions o;
+  o.self_intersections = false;
+  const BakeResult dqs = sk.bake(Method::kDqs, poses, o);
+  const BakeResult trk = sk.bake(Method::kTracking2014, poses, o);
+  CHECK(dqs.frames.size() == 5);
+  CHECK(trk.worst.iso_residual_max < 1e-3);
+  // Rest recovery is 3.6e-3 of the diagonal today (target 1e-3: see the [!mayfail] targets and
+  // docs/skinning.md "Known limits"); this bound catches regressions.
+  CHECK(trk.rest_recovery <= 1e-2);
+}
+
+TEST_CASE("e2e: a procedural rig written to glTF and read back skins identically", "[skinning][e2e][slow]") {
+  const Rig a = make_finger();
+  const std::string path = "e2e_finger_roundtrip.glb";
+  save_rig(a, path);
+  const Rig b = load_rig(path);
+  std::remove(path.c_str());
+  REQUIRE(b.joints.size() == a.joints.size());
+  REQUIRE(b.rest.rows() == a.rest.rows());
+  // The loader may order welded vertices differently: match them by rest position.
+  std::map<std::array<float, 3>, Eigen::Index> index_b;
+  for (Eigen::Index v = 0; v < b.rest.rows(); ++v) index_b[{b.rest(v, 0), b.rest(v, 1), b.rest(v, 2)}] = v;
+  std::vector<Eigen::Index> to_b(static_cast<std::size_t>(a.rest.rows()), -1);
+  for (Eigen::Index v = 0; v < a.rest.rows(); ++v) {
+    auto it = index_b.find({a.rest(v, 0), a.rest(v, 1), a.rest(v, 2)});
+    REQUIRE(it != index_b.end());
+    to_b[static_cast<std::size_t>(v)] = it->second;
+  }
+  std::vector<BendSpec> bends = {parse_bend("Finger1:x:60", a), parse_bend("Finger2:x:90", a),
+                                 parse_bend("Finger3:x:45", a)};
+  const auto pa = bend_animation(a, bends, 5), pb = bend_animation(b, bends, 5);
+  SkinSetup setup = fast_setup();
+  Skinner sa(a, setup), sb(b, setup);
+  BakeOptions o;
+  o.self_intersections = false;
+  const double diag = bbox_diagonal(a.rest);
+  for (Method m : {Method::kLbs, Method::kDqs}) {
+    const BakeResult ra = sa.bake(m, pa, o), rb = sb.bake(m, pb, o);
+    for (std::size_t f = 0; f < ra.frames.size(); ++f) {
+      double worst = 0;
+      for (Eigen::Index v = 0; v < a.rest.rows(); ++v)
+        worst =
+            std::max(worst, double((ra.frames[f].row(v) - rb.frames[f].row(to_b[std::size_t(v)])).norm()));
+      INFO(to_string(m) << " frame " << f);
+      CHECK(worst <= 1e-5 * diag);
+    }
+  }
+}
+
+TEST_CASE("e2e: humanoid elbow at 150 degrees: every joint fits, LBS and DQS intersect",
+          "[skinning][e2e][slow]") {
+  Skinner sk(make_humanoid({4000, false}), fast_setup());
+  for (const BonePart& b : sk.fitted().bones()) {
+    INFO(sk.rig().joints[b.joint].name << ": " << b.error);
+    CHECK((b.fitted || b.vertices == 0));
+  }
+  const auto poses = bend_animation(sk.rig(), {parse_bend("LeftForeArm:x:150", sk.rig())}, 9);
+  const BakeResult lbs = sk.bake(Method::kLbs, poses);
+  const BakeResult dqs = sk.bake(Method::kDqs, poses);
+  CHECK(lbs.stats[0].metrics.self_intersections == 0);  // the rest mesh is clean
+  CHECK(lbs.stats[0].metrics.new_inverted_triangles == 0);
+  CHECK(lbs.worst.self_intersections > 0);
+  CHECK(dqs.worst.self_intersections > 0);
+}
+
+// Issue 6's target on the humanoid; not met yet (docs/skinning.md "Known limits").
+TEST_CASE("e2e: target: humanoid elbow at 150 degrees without intersections with tracking2014",
+          "[skinning][e2e][slow][!mayfail]") {
+  Skinner sk(make_humanoid({4000, false}), fast_setup());
+  const auto poses = bend_animation(sk.rig(), {parse_bend("LeftForeArm:x:150", sk.rig())}, 9);
+  const BakeResult trk = sk.bake(Method::kTracking2014, poses);
+  INFO("self-intersections " << trk.worst.self_intersections << " new inverted "
+                             << trk.worst.new_inverted_triangles << " rest " << trk.rest_recovery);
+  CHECK(trk.worst.self_intersections == 0);
+  CHECK(trk.worst.new_inverted_triangles == 0);
+  CHECK(trk.rest_recovery <= 1e-3);
+}
