@@ -53,6 +53,10 @@ bench: build
 	$(BUILD)/bench/bench_implicit --benchmark_repetitions=5 \
 	  --benchmark_out=$(BUILD)/bench-results/implicit.json --benchmark_out_format=json
 	$(BUILD)/bench/isokit-bench-report $(BUILD)/bench-results/implicit.json --baseline BM_TreeEval/0/real_time
+	$(BUILD)/bench/bench_skinning --benchmark_repetitions=3 \
+	  --benchmark_out=$(BUILD)/bench-results/skinning.json --benchmark_out_format=json
+	$(BUILD)/bench/isokit-bench-report $(BUILD)/bench-results/skinning.json \
+	  --baseline BM_SkinFrame/1/13000/50/iterations:1/manual_time
 
 clean:
 	rm -rf $(BUILD) $(ASAN_BUILD) out demo-out

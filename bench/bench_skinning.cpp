@@ -1,0 +1,69 @@
+// SPDX-License-Identifier: MIT
+// isokit-skin per-frame cost (QUALITY.md "Speed"): the procedural humanoid (46 joints) with its
+// left elbow and knee bent 0 -> 150 -> 0 degrees in 9 frames, per method, at several vertex
+// counts and tracking sub-step sizes (--max-step-rad). Manual time = mean deformation time per
+// frame (metrics excluded); counters: tracker iterations per frame, sub-steps per frame,
+// vertex-iterations per second. The ratio to dqs is printed by isokit-bench-report.
+#include <benchmark/benchmark.h>
+
+#include <map>
+#include <memory>
+
+#include "isokit/skinning/animation.h"
+#include "isokit/skinning/pipeline.h"
+#include "isokit/skinning/procedural.h"
+
+namespace {
+
+using namespace isokit::skinning;
+
+Skinner& skinner(int vertices, double step) {
+  static std::map<std::pair<int, double>, std::unique_ptr<Skinner>> cache;
+  auto& s = cache[{vertices, step}];
+  if (!s) {
+    SkinSetup setup;
+    setup.substeps.max_step_rad = step;
+    s = std::make_unique<Skinner>(make_humanoid({vertices, true}), setup);
+  }
+  return *s;
+}
+
+void BM_SkinFrame(benchmark::State& state) {
+  const Method method = all_methods()[static_cast<std::size_t>(state.range(0))];
+  const int vertices = static_cast<int>(state.range(1));
+  const double step = double(state.range(2)) / 1000.0;
+  Skinner& sk = skinner(vertices, step);
+  const std::vector<Pose> poses = bend_animation(
+      sk.rig(), {parse_bend("LeftForeArm:x:150", sk.rig()), parse_bend("LeftLeg:x:150", sk.rig())}, 9);
+  BakeOptions o;
+  o.metrics = false;
+  double iterations = 0, substeps = 0, vips = 0;
+  for (auto _ : state) {
+    const BakeResult r = sk.bake(method, poses, o);
+    state.SetIterationTime(r.mean_ms * 1e-3);
+    for (const FrameStats& s : r.stats) {
+      iterations += s.iterations;
+      substeps += s.substeps;
+    }
+    vips = r.vertex_iterations_per_second;
+  }
+  const double frames = double(state.iterations()) * double(poses.size());
+  state.counters["iterations_per_frame"] = iterations / frames;
+  state.counters["substeps_per_frame"] = substeps / frames;
+  state.counters["vertex_iterations_per_s"] = vips;
+  state.SetLabel(std::string(to_string(method)) + " " + std::to_string(sk.rig().rest.rows()) + " vertices, " +
+                 (step > 0 ? "step " + std::to_string(step).substr(0, 5) + " rad" : "paper rule"));
+}
+
+// Args: method (0 lbs, 1 dqs, 2 implicit2013, 3 tracking2014), vertices, step in milliradians.
+void args(benchmark::internal::Benchmark* b) {
+  for (int m = 0; m < 4; ++m) b->Args({m, 13000, 50});
+  for (int step : {500, 5}) b->Args({3, 13000, step});
+  for (int m : {1, 3}) b->Args({m, 31000, 50});
+  for (int m : {0, 1}) b->Args({m, 170000, 50});
+}
+BENCHMARK(BM_SkinFrame)->Apply(args)->UseManualTime()->Unit(benchmark::kMillisecond)->Iterations(1);
+
+}  // namespace
+
+BENCHMARK_MAIN();
