@@ -3,6 +3,9 @@
 // ARAP energy + one Newton projection per vertex-iteration) on capsule meshes of ~10k, 50k and
 // 200k vertices, with a cheap analytic field (one capsule) and per-vertex rotations.
 // Args: {vertices class (0: 10k, 1: 50k, 2: 200k), grain (0 = serial)}.
+// BM_TrackIterations: default options (Chebyshev-accelerated Jacobi); BM_TrackIterationsJacobi:
+// `chebyshev_rho = 0` (plain Jacobi, as in 2014), to read the per-iteration cost of the
+// acceleration in the same run.
 #include <benchmark/benchmark.h>
 
 #include <vector>
@@ -25,7 +28,7 @@ test::Mesh bench_mesh(int size_class) {
   return test::capsule_mesh(0.3f, 1.0f, around[size_class], segments[size_class], 6);
 }
 
-void BM_TrackIterations(benchmark::State& state) {
+void track_iterations(benchmark::State& state, float chebyshev_rho) {
   const test::Mesh mesh = bench_mesh(static_cast<int>(state.range(0)));
   const Mat3f r = test::rot_z(0.05f);
   const implicit::CapsuleParamsT<float> rest_cap{{0, -1, 0}, {0, 1, 0}, 0.3f, 0.3f};
@@ -46,6 +49,7 @@ void BM_TrackIterations(benchmark::State& state) {
   o.tolerance = 0.f;  // always run every iteration
   o.smoothing.smoothing_steps = 0;
   o.grain = static_cast<std::size_t>(state.range(1));
+  o.chebyshev_rho = chebyshev_rho;
   IsoSurfaceTracker tracker(mesh.V, mesh.F, iso, o);
   const std::vector<Mat3f> rotations(static_cast<std::size_t>(mesh.V.rows()), r);
   const FieldFunction field = make(cap);
@@ -62,6 +66,14 @@ void BM_TrackIterations(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations() * mesh.V.rows() * kIterations);
 }
 
+void BM_TrackIterations(benchmark::State& state) {
+  track_iterations(state, TrackerOptions{}.chebyshev_rho);
+}
+
+void BM_TrackIterationsJacobi(benchmark::State& state) {
+  track_iterations(state, 0.f);
+}
+
 }  // namespace
 
 BENCHMARK(BM_TrackIterations)
@@ -71,6 +83,13 @@ BENCHMARK(BM_TrackIterations)
     ->Args({1, 1024})
     ->Args({2, 0})
     ->Args({2, 1024})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+BENCHMARK(BM_TrackIterationsJacobi)
+    ->Args({0, 0})
+    ->Args({0, 1024})
+    ->Args({1, 0})
+    ->Args({1, 1024})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 

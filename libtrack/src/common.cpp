@@ -137,7 +137,8 @@ void eval_field(const FieldFunction& field, const Vec3f* pts, std::size_t n, flo
 }
 
 void final_stats(const FieldFunction& field, const std::vector<Vec3f>& pts, const Triangles& triangles,
-                 const std::vector<float>& iso, std::size_t grain, VertexFlags& flags, TrackStats& stats) {
+                 const std::vector<float>& iso, std::size_t grain, VertexFlags& flags, TrackStats& stats,
+                 const std::vector<std::uint8_t>* inverted) {
   const std::size_t n = pts.size();
   std::vector<float> values(n);
   std::vector<Vec3f> grads(n);
@@ -161,11 +162,18 @@ void final_stats(const FieldFunction& field, const std::vector<Vec3f>& pts, cons
   stats.max_residual = mx;
   stats.mean_residual = count > 0 ? static_cast<float>(sum / count) : 0.f;
   stats.inverted_triangles = 0;
-  // Inverted triangles at the centroids.
+  if (inverted)
+    for (std::uint8_t f : *inverted) stats.inverted_triangles += f;
+  else
+    for (std::uint8_t f : inverted_triangles(field, pts, triangles, grain)) stats.inverted_triangles += f;
+}
+
+std::vector<std::uint8_t> inverted_triangles(const FieldFunction& field, const std::vector<Vec3f>& pts,
+                                             const Triangles& triangles, std::size_t grain) {
   const std::size_t nf = static_cast<std::size_t>(triangles.rows());
   std::vector<Vec3f> cen(nf), cg(nf);
   std::vector<float> cv(nf);
-  std::vector<std::uint8_t> cc(nf);
+  std::vector<std::uint8_t> cc(nf), out(nf, 0);
   for (std::size_t f = 0; f < nf; ++f) {
     const auto r = static_cast<Eigen::Index>(f);
     cen[f] = (pts[triangles(r, 0)] + pts[triangles(r, 1)] + pts[triangles(r, 2)]) / 3.f;
@@ -174,8 +182,9 @@ void final_stats(const FieldFunction& field, const std::vector<Vec3f>& pts, cons
   for (std::size_t f = 0; f < nf; ++f) {
     const auto r = static_cast<Eigen::Index>(f);
     const Vec3f a = pts[triangles(r, 0)], b = pts[triangles(r, 1)], c = pts[triangles(r, 2)];
-    if (dot(cross(b - a, c - a), cg[f]) > 0.f) ++stats.inverted_triangles;
+    if (dot(cross(b - a, c - a), cg[f]) > 0.f) out[f] = 1;
   }
+  return out;
 }
 
 void validate_mesh(const Positions& rest, const Triangles& triangles, std::size_t iso_size) {

@@ -45,10 +45,17 @@ int contact_smoothing(const Adjacency& adj, const std::vector<std::uint8_t>& con
                       const SmoothingOptions& options, std::size_t grain, std::vector<Vec3f>& pts,
                       std::vector<float>& beta);
 
+/// Per triangle: 1 if its normal `(b - a) x (c - a)` points along `+∇f` at its centroid
+/// (`dot > 0`; a zero gradient does not count), the definition of an inverted triangle.
+std::vector<std::uint8_t> inverted_triangles(const FieldFunction& field, const std::vector<Vec3f>& pts,
+                                             const Triangles& triangles, std::size_t grain);
+
 /// Final statistics: residuals over vertices with β == 0 and a usable field value, contact
-/// flags from the field (OR-ed into `contact`), inverted triangles.
+/// flags from the field (OR-ed into `contact`), inverted triangles (taken from `inverted` when
+/// given: the flags of these very positions).
 void final_stats(const FieldFunction& field, const std::vector<Vec3f>& pts, const Triangles& triangles,
-                 const std::vector<float>& iso, std::size_t grain, VertexFlags& flags, TrackStats& stats);
+                 const std::vector<float>& iso, std::size_t grain, VertexFlags& flags, TrackStats& stats,
+                 const std::vector<std::uint8_t>* inverted = nullptr);
 
 /// Calls the field over [0, n) in parallel chunks (each chunk one call).
 void eval_field(const FieldFunction& field, const Vec3f* pts, std::size_t n, float* values, Vec3f* grads,

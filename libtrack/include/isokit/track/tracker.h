@@ -10,11 +10,13 @@
 ///    `E = Σi Σj wij ||(p̂i - p̂j) - Ri (pi - pj)||²` (cotangent weights at rest, prescribed Ri)
 ///    restricted to the tangent plane of the last evaluated gradient, scaled by the vertex's
 ///    relaxation mask, followed by one Newton projection — until the largest move is below
-///    `tolerance` or `max_iterations`;
+///    `tolerance` or `max_iterations`. The Jacobi steps are Chebyshev-accelerated
+///    (`chebyshev_rho`; 0 = plain Jacobi as in 2014);
 /// 3. localised Laplacian smoothing with diffused β at contact vertices (2013 §5, eq. 7).
 /// Contacts: flagged by the field, or (rule on) the gradient turned by more than
-/// `contact_angle` between two consecutive evaluations. Every such turn halves the vertex's
-/// Newton and tangential steps for the rest of the call (floor 1/64), and a vertex flagged by the
+/// `contact_angle` between two consecutive evaluations, or (`fold_contacts`) a vertex of a
+/// triangle left inverted by the relaxation. Every turn halves the vertex's Newton and tangential
+/// steps for the rest of the call (floor `min_contact_damping`), and a vertex flagged by the
 /// angle rule takes unrestricted (3D) Jacobi steps: on a contact valley the gradient direction
 /// says nothing about the surface (a deviation from 2013, which stops the vertex).
 /// All updates are double-buffered (Jacobi); results do not depend on `grain`.
@@ -47,8 +49,19 @@ struct TrackerOptions {
   float min_gradient{1e-6f};       ///< |∇f| below this: vertex lost, left in place
   bool angle_contacts{true};       ///< detect contacts by the 2013 gradient-angle rule
   float contact_angle_deg{55.0f};  ///< 2013 §5
-  SmoothingOptions smoothing{};
+  /// 3 β-diffusion and 5 smoothing steps (the 2013 projector keeps 2 and 3): the deeper 2014
+  /// contact folds need the wider smoothing (docs/tracking.md, deviations).
+  SmoothingOptions smoothing{3, 5};
   std::size_t grain{1024};  ///< parallel_for grain (0 = serial)
+  /// Each gradient turn by more than `contact_angle_deg` halves the vertex's Newton and tangential
+  /// steps for the rest of the call, down to this factor (in (0, 1]; not in the papers).
+  float min_contact_damping{0.25f};
+  /// Chebyshev semi-iterative acceleration of the Jacobi relaxation (Wang 2015, not in 2014):
+  /// the assumed spectral radius of the Jacobi iteration, in [0, 1). 0 = plain Jacobi (2014).
+  float chebyshev_rho{0.998f};
+  /// Vertices of triangles still inverted after the relaxation (a crease the angle rule missed)
+  /// are contact vertices too, so that the contact smoothing sees them (not in the papers).
+  bool fold_contacts{true};
 };
 
 /// Stateful tracker: precomputes weights and adjacency, then tracks many times.
