@@ -136,21 +136,14 @@ void eval_field(const FieldFunction& field, const Vec3f* pts, std::size_t n, flo
   });
 }
 
-void final_stats(const FieldFunction& field, const std::vector<Vec3f>& pts, const Triangles& triangles,
-                 const std::vector<float>& iso, std::size_t grain, VertexFlags& flags, TrackStats& stats,
-                 const std::vector<std::uint8_t>* inverted) {
-  const std::size_t n = pts.size();
-  std::vector<float> values(n);
-  std::vector<Vec3f> grads(n);
-  std::vector<std::uint8_t> fc(n);
-  eval_field(field, pts.data(), n, values.data(), grads.data(), fc.data(), grain);
+void vertex_stats(const std::vector<float>& values, const std::vector<float>& iso, const VertexFlags& flags,
+                  TrackStats& stats) {
   double sum = 0;
   long count = 0;
   float mx = 0.f;
   stats.contact_vertices = 0;
   stats.lost_vertices = 0;
-  for (std::size_t i = 0; i < n; ++i) {
-    if (fc[i]) flags.contact[i] = 1;
+  for (std::size_t i = 0; i < values.size(); ++i) {
     stats.contact_vertices += flags.contact[i];
     stats.lost_vertices += flags.lost[i];
     if (flags.contact[i] || flags.lost[i] || flags.beta[i] > 0.f || !std::isfinite(values[i])) continue;
@@ -161,11 +154,84 @@ void final_stats(const FieldFunction& field, const std::vector<Vec3f>& pts, cons
   }
   stats.max_residual = mx;
   stats.mean_residual = count > 0 ? static_cast<float>(sum / count) : 0.f;
+}
+
+void final_stats(const FieldFunction& field, const std::vector<Vec3f>& pts, const Triangles& triangles,
+                 const std::vector<float>& iso, std::size_t grain, VertexFlags& flags, TrackStats& stats,
+                 const std::vector<std::uint8_t>* inverted) {
+  const std::size_t n = pts.size();
+  std::vector<float> values(n);
+  std::vector<Vec3f> grads(n);
+  std::vector<std::uint8_t> fc(n);
+  eval_field(field, pts.data(), n, values.data(), grads.data(), fc.data(), grain);
+  for (std::size_t i = 0; i < n; ++i)
+    if (fc[i]) flags.contact[i] = 1;
+  vertex_stats(values, iso, flags, stats);
   stats.inverted_triangles = 0;
   if (inverted)
     for (std::uint8_t f : *inverted) stats.inverted_triangles += f;
   else
     for (std::uint8_t f : inverted_triangles(field, pts, triangles, grain)) stats.inverted_triangles += f;
+}
+
+Adjacency vertex_faces(const Triangles& triangles, std::size_t num_vertices) {
+  Adjacency out;
+  out.offsets.assign(num_vertices + 1, 0);
+  for (Eigen::Index f = 0; f < triangles.rows(); ++f)
+    for (int k = 0; k < 3; ++k) ++out.offsets[static_cast<std::size_t>(triangles(f, k)) + 1];
+  for (std::size_t v = 0; v < num_vertices; ++v) out.offsets[v + 1] += out.offsets[v];
+  out.neighbors.resize(static_cast<std::size_t>(out.offsets.back()));
+  std::vector<int> fill(out.offsets.begin(), out.offsets.end() - 1);
+  for (Eigen::Index f = 0; f < triangles.rows(); ++f)
+    for (int k = 0; k < 3; ++k) out.neighbors[fill[triangles(f, k)]++] = static_cast<int>(f);
+  return out;
+}
+
+void final_stats_touched(const FieldFunction& field, const std::vector<Vec3f>& pts,
+                         const Triangles& triangles, const Adjacency& vertex_faces,
+                         const std::vector<float>& iso, std::vector<float>& values,
+                         const std::vector<std::uint8_t>& touched, std::size_t grain, VertexFlags& flags,
+                         TrackStats& stats, std::vector<std::uint8_t>& inverted) {
+  const std::size_t n = pts.size();
+  // Vertices to evaluate again, and triangles around smoothed vertices to test again.
+  std::vector<int> redo;
+  std::vector<std::uint8_t> tri_redo(inverted.size(), 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (touched[i]) redo.push_back(static_cast<int>(i));
+    if (flags.beta[i] > 0.f)
+      for (int k = vertex_faces.offsets[i]; k < vertex_faces.offsets[i + 1]; ++k)
+        tri_redo[vertex_faces.neighbors[k]] = 1;
+  }
+  {
+    std::vector<Vec3f> p(redo.size()), g(redo.size());
+    std::vector<float> v(redo.size());
+    std::vector<std::uint8_t> c(redo.size());
+    for (std::size_t a = 0; a < redo.size(); ++a) p[a] = pts[redo[a]];
+    eval_field(field, p.data(), p.size(), v.data(), g.data(), c.data(), grain);
+    for (std::size_t a = 0; a < redo.size(); ++a) {
+      values[redo[a]] = v[a];
+      if (c[a]) flags.contact[redo[a]] = 1;
+    }
+  }
+  std::vector<int> tris;
+  for (std::size_t f = 0; f < tri_redo.size(); ++f)
+    if (tri_redo[f]) tris.push_back(static_cast<int>(f));
+  {
+    std::vector<Vec3f> cen(tris.size()), g(tris.size());
+    std::vector<float> v(tris.size());
+    std::vector<std::uint8_t> c(tris.size());
+    for (std::size_t a = 0; a < tris.size(); ++a)
+      cen[a] = (pts[triangles(tris[a], 0)] + pts[triangles(tris[a], 1)] + pts[triangles(tris[a], 2)]) / 3.f;
+    eval_field(field, cen.data(), cen.size(), v.data(), g.data(), c.data(), grain);
+    for (std::size_t a = 0; a < tris.size(); ++a) {
+      const Eigen::Index r = tris[a];
+      const Vec3f x = pts[triangles(r, 0)], y = pts[triangles(r, 1)], z = pts[triangles(r, 2)];
+      inverted[static_cast<std::size_t>(r)] = dot(cross(y - x, z - x), g[a]) > 0.f ? 1 : 0;
+    }
+  }
+  vertex_stats(values, iso, flags, stats);
+  stats.inverted_triangles = 0;
+  for (std::uint8_t f : inverted) stats.inverted_triangles += f;
 }
 
 std::vector<std::uint8_t> inverted_triangles(const FieldFunction& field, const std::vector<Vec3f>& pts,

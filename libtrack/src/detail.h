@@ -50,12 +50,31 @@ int contact_smoothing(const Adjacency& adj, const std::vector<std::uint8_t>& con
 std::vector<std::uint8_t> inverted_triangles(const FieldFunction& field, const std::vector<Vec3f>& pts,
                                              const Triangles& triangles, std::size_t grain);
 
+/// Contact / lost counts and iso residuals over the vertices with β == 0 that are neither contact
+/// nor lost and have a finite value.
+void vertex_stats(const std::vector<float>& values, const std::vector<float>& iso, const VertexFlags& flags,
+                  TrackStats& stats);
+
 /// Final statistics: residuals over vertices with β == 0 and a usable field value, contact
 /// flags from the field (OR-ed into `contact`), inverted triangles (taken from `inverted` when
 /// given: the flags of these very positions).
 void final_stats(const FieldFunction& field, const std::vector<Vec3f>& pts, const Triangles& triangles,
                  const std::vector<float>& iso, std::size_t grain, VertexFlags& flags, TrackStats& stats,
                  const std::vector<std::uint8_t>* inverted = nullptr);
+
+/// Triangles around each vertex, in CSR form (`neighbors` holds triangle indices).
+Adjacency vertex_faces(const Triangles& triangles, std::size_t num_vertices);
+
+/// Final statistics of the active-set tracker. `values` holds each vertex's value at its last
+/// evaluation; the vertices marked `touched` (moved after the first evaluation, or smoothed) are
+/// evaluated again at `pts`, the others keep that value (they moved by less than the tolerance
+/// since). `inverted` holds the flags of the positions before the contact smoothing; the
+/// triangles around a smoothed vertex (β > 0) are tested again, so the count is exact.
+void final_stats_touched(const FieldFunction& field, const std::vector<Vec3f>& pts,
+                         const Triangles& triangles, const Adjacency& vertex_faces,
+                         const std::vector<float>& iso, std::vector<float>& values,
+                         const std::vector<std::uint8_t>& touched, std::size_t grain, VertexFlags& flags,
+                         TrackStats& stats, std::vector<std::uint8_t>& inverted);
 
 /// Calls the field over [0, n) in parallel chunks (each chunk one call).
 void eval_field(const FieldFunction& field, const Vec3f* pts, std::size_t n, float* values, Vec3f* grads,

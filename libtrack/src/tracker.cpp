@@ -62,6 +62,7 @@ IsoSurfaceTracker::IsoSurfaceTracker(const Positions& rest, const Triangles& tri
   for (float& s : max_step_) s *= options_.max_step;
   diagonal_ = detail::bbox_diagonal(pts);
   mask_.assign(pts.size(), 1.f);
+  vertex_faces_ = detail::vertex_faces(triangles_, pts.size());
 }
 
 void IsoSurfaceTracker::set_relaxation_mask(std::vector<float> mask) {
@@ -74,6 +75,74 @@ void IsoSurfaceTracker::set_relaxation_mask(std::vector<float> mask) {
             "is outside [0, 1] (" + format_number(mask[i]) + ")", "use 0 (no tangential move) .. 1");
   mask_ = std::move(mask);
 }
+
+void IsoSurfaceTracker::mark_rest_inversions(const FieldFunction& rest_field) {
+  require(static_cast<bool>(rest_field), "rest field", "is empty", "pass the field at the rest pose");
+  rest_inverted_ = detail::inverted_triangles(rest_field, rest_pts_, triangles_, options_.grain);
+}
+
+namespace {
+
+// The vertex set one iteration updates: the vertices that moved by more than the tolerance in the
+// previous iteration and their one-ring neighbours (whose Jacobi targets changed). Sorted ascending,
+// so the result does not depend on the order in which vertices were found.
+class ActiveSet {
+ public:
+  ActiveSet(std::size_t n, const Adjacency& adj) : adj_(adj), mark_(n, 0), dense_(n) {
+    for (std::size_t i = 0; i < n; ++i) dense_[i] = static_cast<int>(i);
+  }
+  const std::vector<int>& all() const { return dense_; }
+
+  /// Rebuilds `active` from the per-vertex flags `moved` (set only inside `active`; all zero on
+  /// return).
+  void update(std::vector<int>& active, std::vector<std::uint8_t>& moved, std::size_t grain) {
+    const std::size_t n = dense_.size();
+    std::size_t count = 0;
+    for (int i : active) count += moved[i];
+    if (count == n) {  // everything still moves: keep every vertex
+      std::fill(moved.begin(), moved.end(), std::uint8_t{0});
+      return;
+    }
+    if (count * 4 > n) {
+      // Dense pass (pull): a vertex is active if it or a neighbour moved; `moved` is 0 outside
+      // the previous set.
+      parallel_for(n, grain, [&](std::size_t b, std::size_t e) {
+        for (std::size_t i = b; i < e; ++i) {
+          std::uint8_t m = moved[i];
+          for (int k = adj_.offsets[i]; k < adj_.offsets[i + 1] && !m; ++k) m = moved[adj_.neighbors[k]];
+          mark_[i] = m;
+        }
+      });
+      active.clear();
+      for (std::size_t i = 0; i < n; ++i)
+        if (mark_[i]) active.push_back(static_cast<int>(i));
+      std::fill(mark_.begin(), mark_.end(), std::uint8_t{0});
+      std::fill(moved.begin(), moved.end(), std::uint8_t{0});
+      return;
+    }
+    std::vector<int> next;
+    next.reserve(count * 8);
+    auto add = [&](int v) {
+      if (!mark_[v]) mark_[v] = 1, next.push_back(v);
+    };
+    for (int i : active)
+      if (moved[i]) {
+        add(i);
+        for (int k = adj_.offsets[i]; k < adj_.offsets[i + 1]; ++k) add(adj_.neighbors[k]);
+      }
+    for (int v : next) mark_[v] = 0;
+    for (int i : active) moved[i] = 0;
+    std::sort(next.begin(), next.end());
+    active.swap(next);
+  }
+
+ private:
+  const Adjacency& adj_;
+  std::vector<std::uint8_t> mark_;
+  std::vector<int> dense_;
+};
+
+}  // namespace
 
 TrackStats IsoSurfaceTracker::track(const FieldFunction& field, const std::vector<Mat3f>& rotations,
                                     Positions& positions) {
@@ -88,9 +157,14 @@ TrackStats IsoSurfaceTracker::track(const FieldFunction& field, const std::vecto
       require(std::isfinite(v), "rotation " + std::to_string(i), "is not finite", "pass finite rotations");
   std::vector<Vec3f> cur = detail::to_points(positions, "initial positions");
   // Three position buffers: x_{k-1} (`prev`, for the Chebyshev step), x_k (`cur`), x_{k+1}.
-  std::vector<Vec3f> prev = cur, next(n), grads(n), normal(n, Vec3f{});
-  std::vector<float> values(n), moves(n), damping(n, 1.f);  // moves: squared lengths
-  std::vector<std::uint8_t> fc(n);
+  // Only the active vertices are written; for the others next = cur = prev.
+  std::vector<Vec3f> prev = cur, next = cur, grads(n), normal(n, Vec3f{});
+  std::vector<float> values(n), moves(n, 0.f), damping(n, 1.f);  // moves: squared lengths
+  std::vector<std::uint8_t> fc(n, 0), moved(n, 0), touched(n, 0);
+  // Compact per-iteration buffers of the active vertices (field input and output).
+  std::vector<Vec3f> apts(n), agrads(n);
+  std::vector<float> avals(n);
+  std::vector<std::uint8_t> afc(n);
   flags_.contact.assign(n, 0);
   flags_.lost.assign(n, 0);
   const std::vector<Vec3f>& rest = rest_pts_;
@@ -98,10 +172,13 @@ TrackStats IsoSurfaceTracker::track(const FieldFunction& field, const std::vecto
   const float cos_contact = std::cos(options_.contact_angle_deg * 3.14159265358979f / 180.f);
   const float min_g2 = options_.min_gradient * options_.min_gradient;
   const float tol = options_.tolerance * diagonal_;
+  const float tol2 = tol * tol;
   const float rho2 = options_.chebyshev_rho * options_.chebyshev_rho;
   const float cos_linear = std::cos(kChebyshevMaxTurnDeg * 3.14159265358979f / 180.f);
   std::vector<std::uint8_t> linear(n, 0);  // gradient turned by < kChebyshevMaxTurnDeg last time
   float omega = 1.f;                       // Chebyshev weight of the current iteration (1: plain Jacobi)
+  ActiveSet set(n, adj_);
+  std::vector<int> active = set.all();
 
   // Per directed edge (i, j), constant during the call: ½ (Ri + Rj)(pi - pj) (= pi - pj exactly
   // for identity rotations, so the rest pose gives δ = 0 bit for bit).
@@ -115,34 +192,39 @@ TrackStats IsoSurfaceTracker::track(const FieldFunction& field, const std::vecto
       }
   });
 
-  // One iteration over the chunk [b, e): optional Jacobi tangential ARAP step (reads `cur` and
-  // `prev`, writes `next`), one field evaluation at `next`, one Newton step in place on `next`.
+  // Tangential ARAP displacement of vertex i (Jacobi, neighbours fixed), before the mask:
+  // δ = Σ wij ((p̂j - p̂i) + ½ (Ri + Rj)(pi - pj)) / Σ wij, restricted to the current tangent plane
+  // except at contact vertices, whose gradient direction is meaningless on the contact valley
+  // (full 3D step, damped). Summed per edge, so that p̂ = p with Ri = I gives exactly δ = 0.
+  const int* off = adj_.offsets.data();
+  const int* nb = adj_.neighbors.data();
+  const float* w = weights_.data();
+  const Vec3f* tg = targets.data();
+  auto jacobi_delta = [&](std::size_t i, const Vec3f& p) {
+    Vec3f acc{};
+    for (int k = off[i]; k < off[i + 1]; ++k) acc += ((cur[nb[k]] - p) + tg[k]) * w[k];
+    Vec3f d = acc / weight_sum_[i];
+    const Vec3f nrm = normal[i];
+    if (!flags_.contact[i]) d = d - nrm * dot(d, nrm);
+    return d;
+  };
+  auto relaxes = [&](std::size_t i) { return mask_[i] > 0.f && !flags_.lost[i] && off[i] < off[i + 1]; };
+
+  // One iteration over the active vertices [b, e) of `active`: optional Jacobi tangential ARAP
+  // step (reads `cur` and `prev`, writes `next`), one field evaluation at `next`, one Newton step
+  // in place on `next`.
   auto kernel = [&](bool jacobi, std::size_t b, std::size_t e) {
-    // Raw pointers: lets the compiler keep them in registers across the stores to `nx`.
-    const int* off = adj_.offsets.data();
-    const int* nb = adj_.neighbors.data();
-    const float* w = weights_.data();
-    const Vec3f* tg = targets.data();
     const Vec3f* cu = cur.data();
     const Vec3f* pv = prev.data();
     Vec3f* nx = next.data();
-    for (std::size_t i = b; i < e; ++i) {
+    for (std::size_t a = b; a < e; ++a) {
+      const std::size_t i = static_cast<std::size_t>(active[a]);
       const Vec3f p = cu[i];
       Vec3f q = p;
-      const int s = off[i], t = off[i + 1];
-      if (jacobi && mask_[i] > 0.f && !flags_.lost[i] && s < t) {
-        // Unconstrained minimiser of E in p̂i with the neighbours fixed, as a displacement:
-        // δ = Σ wij ((p̂j - p̂i) + ½ (Ri + Rj)(pi - pj)) / Σ wij.
-        // Summed per edge, so that p̂ = p with Ri = I gives exactly δ = 0 (no drift at rest).
-        Vec3f acc{};
-        for (int k = s; k < t; ++k) acc += ((cu[nb[k]] - p) + tg[k]) * w[k];
-        Vec3f d = acc / weight_sum_[i];
+      if (jacobi && relaxes(i)) {
         const Vec3f nrm = normal[i];
-        // Restrict to the current tangent plane; not at contact vertices, whose gradient direction
-        // is meaningless on the contact valley (full 3D step, damped below).
-        if (!flags_.contact[i]) d = d - nrm * dot(d, nrm);
         const float scale = mask_[i] * damping[i];
-        q = p + d * scale;
+        q = p + jacobi_delta(i, p) * scale;
         if (omega != 1.f && linear[i]) {
           // Chebyshev semi-iteration: x_{k+1} = x_{k-1} + ω (x̂_{k+1} - x_{k-1}), i.e. the Jacobi
           // target plus (ω - 1) times its distance to x_{k-1}; that momentum is kept in the tangent
@@ -152,14 +234,18 @@ TrackStats IsoSurfaceTracker::track(const FieldFunction& field, const std::vecto
         }
       }
       nx[i] = q;
+      apts[a] = q;
     }
-    detail::eval_field(field, next.data() + b, e - b, values.data() + b, grads.data() + b, fc.data() + b, 0);
-    for (std::size_t i = b; i < e; ++i) {
-      const Vec3f g = grads[i];
+    detail::eval_field(field, apts.data() + b, e - b, avals.data() + b, agrads.data() + b, afc.data() + b, 0);
+    for (std::size_t a = b; a < e; ++a) {
+      const std::size_t i = static_cast<std::size_t>(active[a]);
+      const Vec3f g = agrads[a];
       const float g2 = squared_norm(g);
-      if (flags_.lost[i] || !std::isfinite(values[i]) || !detail::finite(g) || !(g2 > min_g2)) {
+      values[i] = avals[a];
+      fc[i] = afc[a];
+      if (flags_.lost[i] || !std::isfinite(avals[a]) || !detail::finite(g) || !(g2 > min_g2)) {
         flags_.lost[i] = 1;
-        next[i] = cur[i];  // left in place
+        nx[i] = cu[i];  // left in place
         moves[i] = 0.f;
         continue;
       }
@@ -175,36 +261,74 @@ TrackStats IsoSurfaceTracker::track(const FieldFunction& field, const std::vecto
         damping[i] = std::max(damping[i] * 0.5f, options_.min_contact_damping);
       }
       {
-        Vec3f step = g * (options_.sigma * damping[i] * (iso_[i] - values[i]) / g2);
+        Vec3f step = g * (options_.sigma * damping[i] * (iso_[i] - avals[a]) / g2);
         const float len2 = squared_norm(step);
         if (len2 > max_step_[i] * max_step_[i]) step = step * (max_step_[i] / std::sqrt(len2));
-        next[i] += step;
+        nx[i] += step;
       }
       normal[i] = nrm;
-      moves[i] = squared_norm(next[i] - cur[i]);  // squared: one square root per iteration below
+      moves[i] = squared_norm(nx[i] - cu[i]);  // squared: one square root per iteration below
     }
   };
 
   TrackStats stats;
+  bool first = true;  // the first evaluation covers every vertex and does not mark it touched
   auto run = [&](bool jacobi) {
-    parallel_for(n, options_.grain, [&](std::size_t b, std::size_t e) { kernel(jacobi, b, e); });
-    prev.swap(cur);  // prev <- x_k
-    cur.swap(next);  // cur <- x_{k+1}; `next` is scratch
+    parallel_for(active.size(), options_.grain, [&](std::size_t b, std::size_t e) { kernel(jacobi, b, e); });
+    // Commit after every vertex has read its neighbours (Jacobi: x_{k+1} from x_k only). For the
+    // inactive vertices prev = cur = next already (up to their last move, below the tolerance).
+    parallel_for(active.size(), options_.grain, [&](std::size_t b, std::size_t e) {
+      for (std::size_t a = b; a < e; ++a) {
+        const int i = active[a];
+        prev[i] = cur[i];  // prev <- x_k
+        cur[i] = next[i];  // cur <- x_{k+1}
+      }
+    });
     float mx = 0.f;
-    for (std::size_t i = 0; i < n; ++i) mx = std::max(mx, moves[i]);
-    mx = std::sqrt(mx);
-    return mx;
+    for (int i : active) {
+      mx = std::max(mx, moves[i]);
+      moved[i] = moves[i] > tol2 ? 1 : 0;
+      if (!first) touched[i] = 1;
+    }
+    first = false;
+    set.update(active, moved, options_.grain);
+    return std::sqrt(mx);
   };
-  for (int k = 0; k < options_.initial_newton_steps; ++k) {
+  for (int k = 0; k < options_.initial_newton_steps && !active.empty(); ++k) {
     const float mx = run(false);
     if (mx <= tol) break;
   }
+  if (options_.max_iterations > 0 && options_.initial_newton_steps == 0) {
+    active = set.all();  // nothing evaluated yet: every vertex starts
+  } else if (options_.max_iterations > 0) {
+    // The relaxation starts on the vertices whose first tangential step is longer than the
+    // tolerance, or that are still settling after the Newton steps: a vertex with a shorter step
+    // would move by less than the tolerance and is left until a neighbour moves (no field
+    // evaluation needed to find them).
+    std::vector<std::uint8_t> start(n, 0);
+    for (int i : active) start[i] = 1;
+    parallel_for(n, options_.grain, [&](std::size_t b, std::size_t e) {
+      for (std::size_t i = b; i < e; ++i) {
+        if (start[i] || !relaxes(i) || normal[i] == Vec3f{}) continue;
+        const float s = mask_[i] * damping[i];
+        if (squared_norm(jacobi_delta(i, cur[i])) * s * s > tol2) start[i] = 1;
+      }
+    });
+    active.clear();
+    for (std::size_t i = 0; i < n; ++i)
+      if (start[i]) active.push_back(static_cast<int>(i));
+  }
   for (int k = 0; k < options_.max_iterations; ++k) {
+    if (active.empty()) {
+      stats.converged = true;
+      break;
+    }
     // Chebyshev weights (Wang 2015, "A Chebyshev semi-iterative approach for accelerating
     // projective and position-based dynamics"): ω = 2 / (2 - ρ²) at the first accelerated
     // iteration, then ω ← 4 / (4 - ρ² ω); plain Jacobi (ω = 1) before, or when ρ = 0.
     if (rho2 > 0.f && k >= kChebyshevDelay)
       omega = k == kChebyshevDelay ? 2.f / (2.f - rho2) : 4.f / (4.f - rho2 * omega);
+    stats.vertex_updates += static_cast<long>(active.size());
     stats.max_move = run(true);
     stats.iterations = k + 1;
     if (stats.max_move <= tol) {
@@ -217,21 +341,24 @@ TrackStats IsoSurfaceTracker::track(const FieldFunction& field, const std::vecto
   for (std::size_t i = 0; i < n; ++i)
     if (fc[i] && !flags_.lost[i]) flags_.contact[i] = 1;
   // Folds: the vertices of a triangle that the relaxation left inverted (typically at a crease
-  // where no consecutive gradients differed by the contact angle) are smoothed like contacts.
-  std::vector<std::uint8_t> inverted;
+  // where no consecutive gradients differed by the contact angle) are smoothed like contacts;
+  // triangles already inverted at rest (mark_rest_inversions) are not folds.
+  std::vector<std::uint8_t> inverted = detail::inverted_triangles(field, cur, triangles_, options_.grain);
   if (options_.fold_contacts) {
-    inverted = detail::inverted_triangles(field, cur, triangles_, options_.grain);
-    for (Eigen::Index f = 0; f < triangles_.rows(); ++f)
-      if (inverted[static_cast<std::size_t>(f)])
+    for (Eigen::Index f = 0; f < triangles_.rows(); ++f) {
+      const std::size_t t = static_cast<std::size_t>(f);
+      if (inverted[t] && (rest_inverted_.empty() || !rest_inverted_[t]))
         for (int k = 0; k < 3; ++k)
           if (!flags_.lost[triangles_(f, k)]) flags_.contact[triangles_(f, k)] = 1;
+    }
   }
   stats.smoothed_vertices =
       detail::contact_smoothing(adj_, flags_.contact, options_.smoothing, options_.grain, cur, flags_.beta);
-  // Unsmoothed positions: the fold test above already counted the inverted triangles.
-  const bool unchanged = stats.smoothed_vertices == 0 || options_.smoothing.smoothing_steps == 0;
-  detail::final_stats(field, cur, triangles_, iso_, options_.grain, flags_, stats,
-                      options_.fold_contacts && unchanged ? &inverted : nullptr);
+  if (options_.smoothing.smoothing_steps > 0)
+    for (std::size_t i = 0; i < n; ++i)
+      if (flags_.beta[i] > 0.f) touched[i] = 1;
+  detail::final_stats_touched(field, cur, triangles_, vertex_faces_, iso_, values, touched, options_.grain,
+                              flags_, stats, inverted);
   for (std::size_t i = 0; i < n; ++i)
     if (!detail::finite(cur[i])) cur[i] = detail::row(positions, static_cast<Eigen::Index>(i));
   detail::from_points(cur, positions);

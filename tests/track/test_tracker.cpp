@@ -79,7 +79,11 @@ TEST_CASE("tracker: rest pose with identity rotations does not move vertices", "
   // Same with explicit identity rotations.
   const TrackStats s2 = tracker.track(e.field.function(), e.rotations(), P);
   CHECK(P == e.mesh.V);
-  CHECK(s2.iterations == 1);
+  // Nothing moves by more than the tolerance: the active set is empty after the first
+  // evaluation, so no relaxation iteration runs.
+  CHECK(s2.converged);
+  CHECK(s2.iterations == 0);
+  CHECK(s2.vertex_updates == 0);
 }
 
 TEST_CASE("tracker: a moved sphere is tracked onto its iso-surface, distortion relaxed", "[track][tracker]") {
@@ -167,6 +171,7 @@ namespace {
 struct SweepResult {
   int max_contacts{0};
   float recovery{0};  ///< max distance to the rest pose after returning to 0°, / bbox diagonal
+  long iterations{0}, vertex_updates{0};  ///< summed over the steps
 };
 
 /// Bends the elbow 0 -> max_deg -> 0 in `step_deg` steps, checking every step in both directions.
@@ -181,6 +186,11 @@ SweepResult elbow_sweep(int max_deg, const TrackerOptions& options, bool expect_
     INFO("angle " << deg << " iterations " << s.iterations << " residual " << s.max_residual << " contacts "
                   << s.contact_vertices << " inverted " << s.inverted_triangles);
     if (expect_no_inversions) CHECK(s.inverted_triangles == 0);
+    // The statistics re-test only what moved; they equal a full recount.
+    CHECK(s.inverted_triangles == count_inverted_triangles(e.field.function(), e.P, e.mesh.F));
+    CHECK(s.vertex_updates <= long(s.iterations) * e.P.rows());
+    result.iterations += s.iterations;
+    result.vertex_updates += s.vertex_updates;
     CHECK(s.max_residual <= 1e-3f);  // field range is [0, 1]
     CHECK(s.lost_vertices == 0);
     CHECK(s.iterations <= options.max_iterations);
@@ -204,6 +214,11 @@ SweepResult elbow_sweep(int max_deg, const TrackerOptions& options, bool expect_
   result.recovery = test::max_distance(e.P, e.mesh.V) / diag;
   INFO("rest recovery " << result.recovery);
   CHECK(result.recovery <= 1e-3f);
+  // Active set: vertices that stop moving leave the relaxation (on this short elbow most vertices
+  // are near the joint; about 80 % of the updates remain — the humanoid test in
+  // tests/skinning shows the gain on a whole body).
+  INFO("vertex updates " << result.vertex_updates << " of " << result.iterations * e.P.rows());
+  CHECK(result.vertex_updates < result.iterations * e.P.rows());
   return result;
 }
 

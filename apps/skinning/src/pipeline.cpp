@@ -192,6 +192,7 @@ BakeResult Skinner::bake(Method method, const std::vector<Pose>& poses, const Ba
     track::TrackerOptions to = setup_.tracker;
     to.grain = options.grain;
     tracker = std::make_unique<track::IsoSurfaceTracker>(rig_.rest, rig_.triangles, std::move(iso), to);
+    tracker->mark_rest_inversions(field->function());
     std::vector<float> mask(static_cast<std::size_t>(nv));
     for (int v = 0; v < nv; ++v) mask[v] = setup_.relaxation_for(rig_.joints[partition[v]].name);
     tracker->set_relaxation_mask(std::move(mask));
@@ -225,6 +226,7 @@ BakeResult Skinner::bake(Method method, const std::vector<Pose>& poses, const Ba
         field->set_pose(skin);
         const track::TrackStats ts = projector->project(field->function(), pos);
         st.iterations = ts.iterations;
+        st.vertex_updates = double(nv) * ts.iterations;
         st.lost_vertices = ts.lost_vertices;
         contact = &projector->flags().contact;
         break;
@@ -251,6 +253,7 @@ BakeResult Skinner::bake(Method method, const std::vector<Pose>& poses, const Ba
           field->set_pose(sk);
           const track::TrackStats ts = tracker->track(field->function(), rotations, current);
           st.iterations += ts.iterations;
+          st.vertex_updates += double(ts.vertex_updates);
           st.lost_vertices = ts.lost_vertices;
           prev_skin = sk;
         }
@@ -262,7 +265,7 @@ BakeResult Skinner::bake(Method method, const std::vector<Pose>& poses, const Ba
     }
     st.ms = ms_since(t0);
     total_ms += st.ms;
-    vertex_iterations += double(nv) * st.iterations;
+    vertex_iterations += st.vertex_updates;
     if (options.metrics) {
       std::vector<std::uint8_t> excluded;
       if (contact) {

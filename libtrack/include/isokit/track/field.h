@@ -32,7 +32,10 @@ std::vector<float> sample_iso_values(const FieldFunction& field, const Positions
 
 /// What a tracking or projection call did.
 struct TrackStats {
-  int iterations{0};          ///< relaxation iterations (2014: Jacobi + Newton; 2013: Newton steps)
+  int iterations{0};  ///< relaxation iterations (2014: Jacobi + Newton; 2013: Newton steps)
+  /// Vertex updates of the relaxation (2014 tracker: the sum of the active-set sizes over its
+  /// iterations, at most `iterations * #V`; 2013 projector: 0).
+  long vertex_updates{0};
   bool converged{false};      ///< largest move fell under the tolerance before the iteration cap
   float max_move{0};          ///< largest vertex move in the last iteration
   float max_residual{0};      ///< max |f(v) - iso_v| over vertices outside the smoothed contact region

@@ -78,6 +78,12 @@ class IsoSurfaceTracker {
   /// \throw InputError for a wrong size or a value outside [0, 1].
   void set_relaxation_mask(std::vector<float> mask);
 
+  /// Records the triangles that are inverted at rest with respect to `rest_field` (the field at
+  /// the rest pose: a composed field can disagree with the rest mesh in concave creases). With
+  /// `fold_contacts`, those triangles are not treated as folds (their vertices are not smoothed
+  /// in every call). \throw InputError for an empty field.
+  void mark_rest_inversions(const FieldFunction& rest_field);
+
   /// Tracks the field from `positions` (in: initial guess, out: result).
   /// \param rotations `#V` target rotations Ri, or empty for identity.
   /// \throw InputError for wrong sizes or non-finite positions / rotations.
@@ -99,6 +105,8 @@ class IsoSurfaceTracker {
   std::vector<float> weights_, weight_sum_, max_step_, mask_;
   float diagonal_{0};
   VertexFlags flags_;
+  Adjacency vertex_faces_;                   // CSR: the triangles around each vertex
+  std::vector<std::uint8_t> rest_inverted_;  // per triangle (empty: none recorded)
 };
 
 }  // namespace isokit::track

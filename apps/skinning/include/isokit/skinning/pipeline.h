@@ -37,9 +37,12 @@ Method method_from_string(const std::string& s);
 std::vector<Method> all_methods();
 
 struct FrameStats {
-  double ms{0};          ///< deformation time of the frame (all sub-steps; no metrics)
-  int substeps{1};       ///< tracking2014 sub-steps (2014 §5.2)
-  int iterations{0};     ///< tracker iterations (sum over sub-steps) or projector steps
+  double ms{0};       ///< deformation time of the frame (all sub-steps; no metrics)
+  int substeps{1};    ///< tracking2014 sub-steps (2014 §5.2)
+  int iterations{0};  ///< tracker iterations (sum over sub-steps) or projector steps
+  /// Vertex updates: tracker active-set sizes summed over iterations and sub-steps
+  /// (tracking2014), or vertices × projector steps (implicit2013).
+  double vertex_updates{0};
   int lost_vertices{0};  ///< vertices without a usable gradient (left in place by the tracker)
   FrameMetrics metrics;  ///< all quality metrics (field ones with the 2014 tree)
 };
@@ -51,7 +54,7 @@ struct BakeResult {
   FrameMetrics worst;        ///< worst over frames
   double rest_recovery{-1};  ///< last frame vs rest / bbox diagonal, when the last pose is the rest pose
   double mean_ms{0};
-  double vertex_iterations_per_second{0};
+  double vertex_iterations_per_second{0};  ///< vertex updates per second of deformation time
 };
 
 struct BakeOptions {
