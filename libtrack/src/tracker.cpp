@@ -274,10 +274,14 @@ TrackStats IsoSurfaceTracker::track(const FieldFunction& field, const std::vecto
   TrackStats stats;
   bool first = true;  // the first evaluation covers every vertex and does not mark it touched
   auto run = [&](bool jacobi) {
-    parallel_for(active.size(), options_.grain, [&](std::size_t b, std::size_t e) { kernel(jacobi, b, e); });
+    // Active sets are often a few thousand vertices: smaller tasks keep both cores busy (the grain
+    // changes no result).
+    const std::size_t grain =
+        options_.grain == 0 ? 0 : std::clamp<std::size_t>(active.size() / 16, 64, options_.grain);
+    parallel_for(active.size(), grain, [&](std::size_t b, std::size_t e) { kernel(jacobi, b, e); });
     // Commit after every vertex has read its neighbours (Jacobi: x_{k+1} from x_k only). For the
     // inactive vertices prev = cur = next already (up to their last move, below the tolerance).
-    parallel_for(active.size(), options_.grain, [&](std::size_t b, std::size_t e) {
+    parallel_for(active.size(), grain, [&](std::size_t b, std::size_t e) {
       for (std::size_t a = b; a < e; ++a) {
         const int i = active[a];
         prev[i] = cur[i];  // prev <- x_k
