@@ -3,7 +3,8 @@
 // left elbow and knee bent 0 -> 150 -> 0 degrees in 9 frames, per method, at several vertex
 // counts and tracking sub-step sizes (--max-step-rad). Manual time = mean deformation time per
 // frame (metrics excluded); counters: tracker iterations per frame, sub-steps per frame,
-// vertex updates (tracker active-set sizes summed over iterations) per frame and per second. The ratio to dqs is printed by isokit-bench-report.
+// vertex updates (tracker active-set sizes summed over iterations) per frame and per second. The ratio to dqs
+// is printed by isokit-bench-report.
 #include <benchmark/benchmark.h>
 
 #include <map>

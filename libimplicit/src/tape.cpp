@@ -405,10 +405,10 @@ std::uint64_t Tape::eval_leaves(const Vec3f& p, FieldSample* samples) const {
   // over by every node above it, whatever its gradient, as by compose_node).
   const std::size_t m = frame_stride_;
   alignas(16) float q[3 * ((kSparseMaxLeaves + 3) / 4 * 4)];  // 3 rows of frame_stride_
-  std::uint64_t todo = local_points(leaf_frames_.data(), m, p, q), nonzero = 0;
-  while (todo) {
-    const int k = lowest_bit(todo);
-    todo &= todo - 1;
+  std::uint64_t pending = local_points(leaf_frames_.data(), m, p, q), nonzero = 0;
+  while (pending) {
+    const int k = lowest_bit(pending);
+    pending &= pending - 1;
     const TapeLeaf& l = leaves_[std::size_t(k)];
     const Vec3f local{q[std::size_t(k)], q[m + std::size_t(k)], q[2 * m + std::size_t(k)]};
     FieldSample s =

@@ -11,6 +11,7 @@
 
 #include "isokit/core/error.h"
 #include "isokit/skinning/metrics.h"
+#include "mesh_fixture.h"
 #include "test_util.h"
 
 using namespace isokit;
@@ -20,12 +21,8 @@ using track::Triangles;
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-
-struct Mesh {
-  Positions v;
-  Triangles f;
-};
+using testing::kPi;
+using testing::Mesh;
 
 Mesh from_lists(const std::vector<Eigen::Vector3d>& v, const std::vector<std::array<int, 3>>& f) {
   Mesh m;

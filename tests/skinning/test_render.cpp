@@ -12,6 +12,7 @@
 
 #include "isokit/core/error.h"
 #include "isokit/skinning/render.h"
+#include "mesh_fixture.h"
 
 using namespace isokit;
 using namespace isokit::skinning;
@@ -20,12 +21,8 @@ using track::Triangles;
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-
-struct Mesh {
-  Positions v;
-  Triangles f;
-};
+using testing::kPi;
+using testing::Mesh;
 
 /// UV sphere, counter-clockwise seen from outside.
 Mesh sphere(int rings, int segments, double radius, const Eigen::Vector3d& centre) {

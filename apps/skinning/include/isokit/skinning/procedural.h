@@ -32,7 +32,7 @@ struct CylinderOptions {
 };
 
 /// A finger along +y, palm side +z, slightly tapered (radius 0.09 → 0.072), rounded base and tip,
-/// 1.0 long: joints "Finger0" (root, base of the metacarpal stub, y = 0), "Finger1" (knuckle,
+/// 1.0 long: joints "Finger0" (root, base of the metacarpal, y = 0), "Finger1" (knuckle,
 /// y = 0.15), "Finger2" (y = 0.55), "Finger3" (y = 0.80; its bone ends at the tip centre, 0.98).
 struct FingerOptions {
   int vertices{3000};  ///< requested vertex count (achieved within ~2 %)
