@@ -341,6 +341,7 @@ TrackStats IsoSurfaceTracker::track(const FieldFunction& field, const std::vecto
     }
   }
   if (options_.max_iterations == 0) stats.converged = true;
+  if (first) std::fill(touched.begin(), touched.end(), std::uint8_t{1});  // nothing evaluated yet
   // Contacts reported by the field at the last evaluation also get smoothed.
   for (std::size_t i = 0; i < n; ++i)
     if (fc[i] && !flags_.lost[i]) flags_.contact[i] = 1;

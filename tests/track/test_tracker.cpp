@@ -115,6 +115,28 @@ TEST_CASE("tracker: a moved sphere is tracked onto its iso-surface, distortion r
   CHECK(P.allFinite());
 }
 
+TEST_CASE("tracker: with no iterations at all the statistics still evaluate every vertex",
+          "[track][tracker]") {
+  const test::Mesh m = capsule_mesh(0.5f, 0.f, 24, 0, 12);
+  auto sphere = std::make_shared<implicit::SphereField>(Vec3f{0, 0, 0}, 0.5f);
+  const std::vector<float> iso = sample_iso_values(test::as_function(sphere), m.V);
+  auto moved = std::make_shared<implicit::SphereField>(Vec3f{0.02f, 0.f, 0.f}, 0.5f);
+  TrackerOptions o;
+  o.initial_newton_steps = 0;
+  o.max_iterations = 0;
+  o.smoothing.smoothing_steps = 0;
+  IsoSurfaceTracker tracker(m.V, m.F, iso, o);
+  Positions P = m.V;
+  const TrackStats s = tracker.track(test::as_function(moved), {}, P);
+  CHECK(P == m.V);  // nothing ran
+  const std::vector<float> now = sample_iso_values(test::as_function(moved), m.V);
+  float expected = 0.f;
+  for (std::size_t i = 0; i < now.size(); ++i) expected = std::max(expected, std::abs(now[i] - iso[i]));
+  CHECK(expected > 0.f);
+  CHECK(s.max_residual == expected);
+  CHECK(s.inverted_triangles == count_inverted_triangles(test::as_function(moved), P, m.F));
+}
+
 TEST_CASE("tracker: a rotated capsule with matching rotations stays rigid", "[track][tracker]") {
   const test::Mesh m = capsule_mesh(0.3f, 0.6f, 20, 16, 5);
   auto cap = std::make_shared<implicit::CapsuleField>(Vec3f{0, -0.6f, 0}, Vec3f{0, 0.6f, 0}, 0.3f);
