@@ -162,9 +162,10 @@ TrackStats IsoSurfaceTracker::track(const FieldFunction& field, const std::vecto
   std::vector<float> values(n), moves(n, 0.f), damping(n, 1.f);  // moves: squared lengths
   std::vector<std::uint8_t> fc(n, 0), moved(n, 0), touched(n, 0);
   // Compact per-iteration buffers of the active vertices (field input and output).
-  std::vector<Vec3f> apts(n), agrads(n);
-  std::vector<float> avals(n);
-  std::vector<std::uint8_t> afc(n);
+  // Allocated at the first sparse iteration (a dense call never touches them).
+  std::vector<Vec3f> apts, agrads;
+  std::vector<float> avals;
+  std::vector<std::uint8_t> afc;
   flags_.contact.assign(n, 0);
   flags_.lost.assign(n, 0);
   const std::vector<Vec3f>& rest = rest_pts_;
@@ -200,12 +201,17 @@ TrackStats IsoSurfaceTracker::track(const FieldFunction& field, const std::vecto
   const int* nb = adj_.neighbors.data();
   const float* w = weights_.data();
   const Vec3f* tg = targets.data();
-  auto jacobi_delta = [&](std::size_t i, const Vec3f& p) {
+  // Raw pointers throughout the hot loops: lets the compiler keep them in registers across the
+  // stores to the position buffers.
+  const float* wsum = weight_sum_.data();
+  const Vec3f* nrms = normal.data();
+  const std::uint8_t* contact = flags_.contact.data();
+  auto jacobi_delta = [=](const Vec3f* cu, std::size_t i, const Vec3f& p) {
     Vec3f acc{};
-    for (int k = off[i]; k < off[i + 1]; ++k) acc += ((cur[nb[k]] - p) + tg[k]) * w[k];
-    Vec3f d = acc / weight_sum_[i];
-    const Vec3f nrm = normal[i];
-    if (!flags_.contact[i]) d = d - nrm * dot(d, nrm);
+    for (int k = off[i]; k < off[i + 1]; ++k) acc += ((cu[nb[k]] - p) + tg[k]) * w[k];
+    Vec3f d = acc / wsum[i];
+    const Vec3f nrm = nrms[i];
+    if (!contact[i]) d = d - nrm * dot(d, nrm);
     return d;
   };
   auto relaxes = [&](std::size_t i) { return mask_[i] > 0.f && !flags_.lost[i] && off[i] < off[i + 1]; };
@@ -213,18 +219,25 @@ TrackStats IsoSurfaceTracker::track(const FieldFunction& field, const std::vecto
   // One iteration over the active vertices [b, e) of `active`: optional Jacobi tangential ARAP
   // step (reads `cur` and `prev`, writes `next`), one field evaluation at `next`, one Newton step
   // in place on `next`.
-  auto kernel = [&](bool jacobi, std::size_t b, std::size_t e) {
+  // With every vertex active (`dense`) the field reads and writes the per-vertex arrays directly;
+  // otherwise the active vertices are gathered into the compact buffers.
+  auto kernel = [&](bool jacobi, bool dense, std::size_t b, std::size_t e) {
     const Vec3f* cu = cur.data();
     const Vec3f* pv = prev.data();
     Vec3f* nx = next.data();
+    const int* act = active.data();
+    Vec3f* in = dense ? nx : apts.data();
+    float* val = dense ? values.data() : avals.data();
+    Vec3f* grd = dense ? grads.data() : agrads.data();
+    std::uint8_t* fcv = dense ? fc.data() : afc.data();
     for (std::size_t a = b; a < e; ++a) {
-      const std::size_t i = static_cast<std::size_t>(active[a]);
+      const std::size_t i = dense ? a : static_cast<std::size_t>(act[a]);
       const Vec3f p = cu[i];
       Vec3f q = p;
       if (jacobi && relaxes(i)) {
-        const Vec3f nrm = normal[i];
+        const Vec3f nrm = nrms[i];
         const float scale = mask_[i] * damping[i];
-        q = p + jacobi_delta(i, p) * scale;
+        q = p + jacobi_delta(cu, i, p) * scale;
         if (omega != 1.f && linear[i]) {
           // Chebyshev semi-iteration: x_{k+1} = x_{k-1} + ω (x̂_{k+1} - x_{k-1}), i.e. the Jacobi
           // target plus (ω - 1) times its distance to x_{k-1}; that momentum is kept in the tangent
@@ -234,16 +247,15 @@ TrackStats IsoSurfaceTracker::track(const FieldFunction& field, const std::vecto
         }
       }
       nx[i] = q;
-      apts[a] = q;
+      in[a] = q;
     }
-    detail::eval_field(field, apts.data() + b, e - b, avals.data() + b, agrads.data() + b, afc.data() + b, 0);
+    detail::eval_field(field, in + b, e - b, val + b, grd + b, fcv + b, 0);
     for (std::size_t a = b; a < e; ++a) {
-      const std::size_t i = static_cast<std::size_t>(active[a]);
-      const Vec3f g = agrads[a];
-      const float g2 = squared_norm(g);
-      values[i] = avals[a];
-      fc[i] = afc[a];
-      if (flags_.lost[i] || !std::isfinite(avals[a]) || !detail::finite(g) || !(g2 > min_g2)) {
+      const std::size_t i = dense ? a : static_cast<std::size_t>(act[a]);
+      const Vec3f g = grd[a];
+      const float g2 = squared_norm(g), f = val[a];
+      if (!dense) values[i] = f, fc[i] = fcv[a];
+      if (flags_.lost[i] || !std::isfinite(f) || !detail::finite(g) || !(g2 > min_g2)) {
         flags_.lost[i] = 1;
         nx[i] = cu[i];  // left in place
         moves[i] = 0.f;
@@ -261,7 +273,7 @@ TrackStats IsoSurfaceTracker::track(const FieldFunction& field, const std::vecto
         damping[i] = std::max(damping[i] * 0.5f, options_.min_contact_damping);
       }
       {
-        Vec3f step = g * (options_.sigma * damping[i] * (iso_[i] - avals[a]) / g2);
+        Vec3f step = g * (options_.sigma * damping[i] * (iso_[i] - f) / g2);
         const float len2 = squared_norm(step);
         if (len2 > max_step_[i] * max_step_[i]) step = step * (max_step_[i] / std::sqrt(len2));
         nx[i] += step;
@@ -274,25 +286,43 @@ TrackStats IsoSurfaceTracker::track(const FieldFunction& field, const std::vecto
   TrackStats stats;
   bool first = true;  // the first evaluation covers every vertex and does not mark it touched
   auto run = [&](bool jacobi) {
+    const bool dense = active.size() == n;
+    if (!dense && apts.empty()) {
+      apts.resize(n);
+      agrads.resize(n);
+      avals.resize(n);
+      afc.resize(n);
+    }
     // Active sets are often a few thousand vertices: smaller tasks keep both cores busy (the grain
     // changes no result).
     const std::size_t grain =
         options_.grain == 0 ? 0 : std::clamp<std::size_t>(active.size() / 16, 64, options_.grain);
-    parallel_for(active.size(), grain, [&](std::size_t b, std::size_t e) { kernel(jacobi, b, e); });
-    // Commit after every vertex has read its neighbours (Jacobi: x_{k+1} from x_k only). For the
-    // inactive vertices prev = cur = next already (up to their last move, below the tolerance).
-    parallel_for(active.size(), grain, [&](std::size_t b, std::size_t e) {
-      for (std::size_t a = b; a < e; ++a) {
-        const int i = active[a];
-        prev[i] = cur[i];  // prev <- x_k
-        cur[i] = next[i];  // cur <- x_{k+1}
-      }
-    });
+    parallel_for(active.size(), grain, [&](std::size_t b, std::size_t e) { kernel(jacobi, dense, b, e); });
     float mx = 0.f;
-    for (int i : active) {
-      mx = std::max(mx, moves[i]);
-      moved[i] = moves[i] > tol2 ? 1 : 0;
-      if (!first) touched[i] = 1;
+    if (dense) {
+      // Every vertex was written: rotate the buffers (Jacobi: x_{k+1} from x_k only).
+      prev.swap(cur);  // prev <- x_k
+      cur.swap(next);  // cur <- x_{k+1}; `next` is scratch
+      for (std::size_t i = 0; i < n; ++i) {
+        mx = std::max(mx, moves[i]);
+        moved[i] = moves[i] > tol2 ? 1 : 0;
+      }
+      if (!first) std::fill(touched.begin(), touched.end(), std::uint8_t{1});
+    } else {
+      // Commit after every vertex has read its neighbours. For the inactive vertices prev = cur
+      // already (up to their last move, below the tolerance).
+      parallel_for(active.size(), grain, [&](std::size_t b, std::size_t e) {
+        for (std::size_t a = b; a < e; ++a) {
+          const int i = active[a];
+          prev[i] = cur[i];  // prev <- x_k
+          cur[i] = next[i];  // cur <- x_{k+1}
+        }
+      });
+      for (int i : active) {
+        mx = std::max(mx, moves[i]);
+        moved[i] = moves[i] > tol2 ? 1 : 0;
+        if (!first) touched[i] = 1;
+      }
     }
     first = false;
     set.update(active, moved, options_.grain);
@@ -315,7 +345,7 @@ TrackStats IsoSurfaceTracker::track(const FieldFunction& field, const std::vecto
       for (std::size_t i = b; i < e; ++i) {
         if (start[i] || !relaxes(i) || normal[i] == Vec3f{}) continue;
         const float s = mask_[i] * damping[i];
-        if (squared_norm(jacobi_delta(i, cur[i])) * s * s > tol2) start[i] = 1;
+        if (squared_norm(jacobi_delta(cur.data(), i, cur[i])) * s * s > tol2) start[i] = 1;
       }
     });
     active.clear();
