@@ -387,28 +387,34 @@ std::size_t key_after(const KeyT* keys, unsigned n, double t) {
   return static_cast<std::size_t>(it - keys);
 }
 
-Eigen::Vector3d sample(const aiVectorKey* keys, unsigned n, double t, const Eigen::Vector3d& fallback) {
+// Value of an assimp key track at time t: clamped at the ends, `blend(a, b, u)` between the keys
+// around t (lerp for positions and scales, slerp for rotations).
+template <class Key, class Value, class Convert, class Blend>
+Value sample_keys(const Key* keys, unsigned n, double t, const Value& fallback, Convert convert,
+                  Blend blend) {
   if (n == 0) return fallback;
-  auto v = [](const aiVector3D& x) { return Eigen::Vector3d(x.x, x.y, x.z); };
-  if (t <= keys[0].mTime) return v(keys[0].mValue);
-  if (t >= keys[n - 1].mTime) return v(keys[n - 1].mValue);
+  if (t <= keys[0].mTime) return convert(keys[0].mValue);
+  if (t >= keys[n - 1].mTime) return convert(keys[n - 1].mValue);
   const std::size_t b = key_after(keys, n, t);
   const std::size_t a = b - 1;
   const double span = keys[b].mTime - keys[a].mTime;
   const double u = span > 0 ? (t - keys[a].mTime) / span : 0.0;
-  return (1 - u) * v(keys[a].mValue) + u * v(keys[b].mValue);
+  return blend(convert(keys[a].mValue), convert(keys[b].mValue), u);
+}
+
+Eigen::Vector3d sample(const aiVectorKey* keys, unsigned n, double t, const Eigen::Vector3d& fallback) {
+  return sample_keys(
+      keys, n, t, fallback, [](const aiVector3D& x) { return Eigen::Vector3d(x.x, x.y, x.z); },
+      [](const Eigen::Vector3d& a, const Eigen::Vector3d& b, double u) -> Eigen::Vector3d {
+        return (1 - u) * a + u * b;
+      });
 }
 
 Eigen::Quaterniond sample(const aiQuatKey* keys, unsigned n, double t, const Eigen::Quaterniond& fallback) {
-  if (n == 0) return fallback;
-  auto q = [](const aiQuaternion& x) { return Eigen::Quaterniond(x.w, x.x, x.y, x.z).normalized(); };
-  if (t <= keys[0].mTime) return q(keys[0].mValue);
-  if (t >= keys[n - 1].mTime) return q(keys[n - 1].mValue);
-  const std::size_t b = key_after(keys, n, t);
-  const std::size_t a = b - 1;
-  const double span = keys[b].mTime - keys[a].mTime;
-  const double u = span > 0 ? (t - keys[a].mTime) / span : 0.0;
-  return q(keys[a].mValue).slerp(u, q(keys[b].mValue));
+  return sample_keys(
+      keys, n, t, fallback,
+      [](const aiQuaternion& x) { return Eigen::Quaterniond(x.w, x.x, x.y, x.z).normalized(); },
+      [](const Eigen::Quaterniond& a, const Eigen::Quaterniond& b, double u) { return a.slerp(u, b); });
 }
 
 void check_keys(const aiNodeAnim* ch, const std::string& what) {
