@@ -7,6 +7,7 @@
 // is printed by isokit-bench-report.
 #include <benchmark/benchmark.h>
 
+#include <cmath>
 #include <map>
 #include <memory>
 
@@ -34,13 +35,9 @@ Skinner& skinner(int vertices, double step) {
   return *s;
 }
 
-void BM_SkinFrame(benchmark::State& state) {
-  const Method method = all_methods()[static_cast<std::size_t>(state.range(0))];
-  const int vertices = static_cast<int>(state.range(1));
-  const double step = double(state.range(2)) / 1000.0;
-  Skinner& sk = skinner(vertices, step);
-  const std::vector<Pose> poses = bend_animation(
-      sk.rig(), {parse_bend("LeftForeArm:x:150", sk.rig()), parse_bend("LeftLeg:x:150", sk.rig())}, 9);
+/// Bakes `poses` once per benchmark iteration (metrics off); manual time = mean ms per frame;
+/// counters per frame: tracker iterations, sub-steps, vertex updates, and updates per second.
+void bake_and_count(benchmark::State& state, Skinner& sk, Method method, const std::vector<Pose>& poses) {
   BakeOptions o;
   o.metrics = false;
   double iterations = 0, substeps = 0, updates = 0, vips = 0;
@@ -59,6 +56,16 @@ void BM_SkinFrame(benchmark::State& state) {
   state.counters["substeps_per_frame"] = substeps / frames;
   state.counters["vertex_updates_per_frame"] = updates / frames;
   state.counters["vertex_updates_per_s"] = vips;
+}
+
+void BM_SkinFrame(benchmark::State& state) {
+  const Method method = all_methods()[static_cast<std::size_t>(state.range(0))];
+  const int vertices = static_cast<int>(state.range(1));
+  const double step = double(state.range(2)) / 1000.0;
+  Skinner& sk = skinner(vertices, step);
+  const std::vector<Pose> poses = bend_animation(
+      sk.rig(), {parse_bend("LeftForeArm:x:150", sk.rig()), parse_bend("LeftLeg:x:150", sk.rig())}, 9);
+  bake_and_count(state, sk, method, poses);
   state.SetLabel(std::string(to_string(method)) + " " + std::to_string(sk.rig().rest.rows()) + " vertices, " +
                  (step > 0 ? "step " + std::to_string(step).substr(0, 5) + " rad" : "paper rule"));
 }
@@ -73,6 +80,55 @@ void args(benchmark::internal::Benchmark* b) {
   }
 }
 BENCHMARK(BM_SkinFrame)->Apply(args)->UseManualTime()->Unit(benchmark::kMillisecond)->Iterations(1);
+
+// The 2014 paper's Table 1 protocol ("all joints are animated simultaneously"; time step =
+// radians per animation step): spine, neck, head, shoulders, elbows, wrists, fingers, hips,
+// knees and ankles bend together from rest to a full-body pose and back, with every joint
+// turning by at most `step` between two frames (frames = 2 ceil(120° / step) + 1), sub-stepped
+// by the library's default rule (2014 §5.2). Manual time = mean deformation time per frame.
+std::vector<BendSpec> full_body_bends(const Rig& rig) {
+  std::vector<std::string> specs = {
+      "Spine:x:15",     "Spine1:x:15",     "Spine2:x:15",       "Neck:x:20",          "Head:x:15",
+      "LeftArm:x:60",   "RightArm:x:60",   "LeftForeArm:x:120", "RightForeArm:x:120", "LeftHand:x:45",
+      "RightHand:x:45", "LeftUpLeg:x:-60", "RightUpLeg:x:-45",  "LeftLeg:x:120",      "RightLeg:x:90",
+      "LeftFoot:x:30",  "RightFoot:x:30"};
+  for (const char* side : {"Left", "Right"})
+    for (const char* finger : {"Thumb", "Index", "Middle", "Pinky"})
+      for (int k = 1; k <= 3; ++k)
+        specs.push_back(std::string(side) + "Hand" + finger + std::to_string(k) + ":x:45");
+  std::vector<BendSpec> out;
+  for (const std::string& s : specs) {
+    const std::string joint = s.substr(0, s.find(':'));
+    for (const Joint& j : rig.joints)
+      if (j.name == joint) out.push_back(parse_bend(s, rig));
+  }
+  return out;
+}
+
+void BM_SkinStep(benchmark::State& state) {
+  const Method method = all_methods()[static_cast<std::size_t>(state.range(0))];
+  const int vertices = static_cast<int>(state.range(1));
+  const double step = double(state.range(2)) / 1000.0;
+  Skinner& sk = skinner(vertices, 0.0);  // library defaults: the paper's sub-step rule only
+  const double max_rad = 120.0 * 3.14159265358979 / 180.0;
+  const int frames = 2 * static_cast<int>(std::ceil(max_rad / step - 1e-9)) + 1;
+  const std::vector<BendSpec> bends = full_body_bends(sk.rig());
+  const std::vector<Pose> poses = bend_animation(sk.rig(), bends, frames);
+  bake_and_count(state, sk, method, poses);
+  state.counters["bent_joints"] = double(bends.size());
+  state.SetLabel(std::string(to_string(method)) + " " + std::to_string(sk.rig().rest.rows()) +
+                 " vertices, Table 1 protocol, time step " + std::to_string(step).substr(0, 5) + " rad, " +
+                 std::to_string(frames) + " frames");
+}
+
+// Args: method, vertices, time step in milliradians (2014 Table 1: 0.5, 0.05, 0.005 rad).
+void step_args(benchmark::internal::Benchmark* b) {
+  for (int v : {13000, 31000, 170000}) {
+    b->Args({1, v, 50});
+    for (int step : {500, 50, 5}) b->Args({3, v, step});
+  }
+}
+BENCHMARK(BM_SkinStep)->Apply(step_args)->UseManualTime()->Unit(benchmark::kMillisecond)->Iterations(1);
 
 }  // namespace
 

@@ -235,20 +235,28 @@ void final_stats_touched(const FieldFunction& field, const std::vector<Vec3f>& p
 }
 
 std::vector<std::uint8_t> inverted_triangles(const FieldFunction& field, const std::vector<Vec3f>& pts,
-                                             const Triangles& triangles, std::size_t grain) {
+                                             const Triangles& triangles, std::size_t grain,
+                                             const std::vector<int>* candidates) {
   const std::size_t nf = static_cast<std::size_t>(triangles.rows());
-  std::vector<Vec3f> cen(nf), cg(nf);
-  std::vector<float> cv(nf);
-  std::vector<std::uint8_t> cc(nf), out(nf, 0);
-  for (std::size_t f = 0; f < nf; ++f) {
-    const auto r = static_cast<Eigen::Index>(f);
-    cen[f] = (pts[triangles(r, 0)] + pts[triangles(r, 1)] + pts[triangles(r, 2)]) / 3.f;
+  std::vector<int> all;
+  if (!candidates) {
+    all.resize(nf);
+    for (std::size_t f = 0; f < nf; ++f) all[f] = static_cast<int>(f);
+    candidates = &all;
   }
-  eval_field(field, cen.data(), nf, cv.data(), cg.data(), cc.data(), grain);
-  for (std::size_t f = 0; f < nf; ++f) {
-    const auto r = static_cast<Eigen::Index>(f);
+  const std::size_t m = candidates->size();
+  std::vector<Vec3f> cen(m), cg(m);
+  std::vector<float> cv(m);
+  std::vector<std::uint8_t> cc(m), out(nf, 0);
+  for (std::size_t k = 0; k < m; ++k) {
+    const auto r = static_cast<Eigen::Index>((*candidates)[k]);
+    cen[k] = (pts[triangles(r, 0)] + pts[triangles(r, 1)] + pts[triangles(r, 2)]) / 3.f;
+  }
+  eval_field(field, cen.data(), m, cv.data(), cg.data(), cc.data(), grain);
+  for (std::size_t k = 0; k < m; ++k) {
+    const auto r = static_cast<Eigen::Index>((*candidates)[k]);
     const Vec3f a = pts[triangles(r, 0)], b = pts[triangles(r, 1)], c = pts[triangles(r, 2)];
-    if (dot(cross(b - a, c - a), cg[f]) > 0.f) out[f] = 1;
+    if (dot(cross(b - a, c - a), cg[k]) > 0.f) out[static_cast<std::size_t>(r)] = 1;
   }
   return out;
 }

@@ -47,8 +47,10 @@ int contact_smoothing(const Adjacency& adj, const std::vector<std::uint8_t>& con
 
 /// Per triangle: 1 if its normal `(b - a) x (c - a)` points along `+∇f` at its centroid
 /// (`dot > 0`; a zero gradient does not count), the definition of an inverted triangle.
+/// With `candidates`, only the listed triangles are tested (the others get 0).
 std::vector<std::uint8_t> inverted_triangles(const FieldFunction& field, const std::vector<Vec3f>& pts,
-                                             const Triangles& triangles, std::size_t grain);
+                                             const Triangles& triangles, std::size_t grain,
+                                             const std::vector<int>* candidates = nullptr);
 
 /// Contact / lost counts and iso residuals over the vertices with β == 0 that are neither contact
 /// nor lost and have a finite value.
@@ -79,6 +81,30 @@ void final_stats_touched(const FieldFunction& field, const std::vector<Vec3f>& p
 /// Calls the field over [0, n) in parallel chunks (each chunk one call).
 void eval_field(const FieldFunction& field, const Vec3f* pts, std::size_t n, float* values, Vec3f* grads,
                 std::uint8_t* contact, std::size_t grain);
+
+/// The tangential ARAP system of one relaxation step (2014 §5.2, solved instead of one Jacobi
+/// sweep): unknown displacements d_i of the listed vertices, the others held in place,
+/// `(Σj wij / s_i) d_i - Σ_{j unknown} wij dj = Σj wij ((pj - pi) + tij)`, each row and d_i
+/// restricted to the tangent plane of `normals[i]` unless `free3d[i]`. Per-vertex arrays are
+/// indexed by vertex, `weights` and `targets` by directed edge.
+struct TangentProblem {
+  const Adjacency* adj{nullptr};
+  const float* weights{nullptr};
+  const float* weight_sums{nullptr};
+  const Vec3f* targets{nullptr};
+  const Vec3f* positions{nullptr};
+  const Vec3f* normals{nullptr};
+  const std::uint8_t* free3d{nullptr};
+  const float* scale{nullptr};  ///< s_i in (0, 1]: mask × damping
+  float tolerance{0};           ///< stop when every |r_i| / diag_i is below this (a Jacobi step)
+  int max_iterations{100};
+};
+
+/// Jacobi-preconditioned conjugate gradient on `p` (filtered PCG). `local` has one entry per
+/// vertex, all -1 (restored on return); `d` receives one displacement per unknown. Serial and
+/// deterministic. Returns the CG iterations run.
+int solve_tangential_cg(const TangentProblem& p, const std::vector<int>& unknowns, std::vector<int>& local,
+                        std::vector<Vec3f>& d);
 
 void validate_mesh(const Positions& rest, const Triangles& triangles, std::size_t iso_size);
 

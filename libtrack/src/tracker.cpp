@@ -18,6 +18,9 @@ constexpr int kChebyshevDelay = 10;
 // The Chebyshev extrapolation assumes a linear iteration: a vertex whose gradient turned by more
 // than this between its last two evaluations (a crease, a contact valley) takes a plain Jacobi step.
 constexpr float kChebyshevMaxTurnDeg = 10.f;
+// Fold test: a triangle is tested at its centroid when its normal deviates from the outward
+// direction at one of its vertices by more than this (an inverted one deviates by more than 90°).
+constexpr float kFoldCandidateDeg = 45.f;
 
 void check_options(const TrackerOptions& o) {
   require(std::isfinite(o.sigma) && o.sigma > 0.f && o.sigma <= 1.f, "TrackerOptions::sigma",
@@ -40,6 +43,8 @@ void check_options(const TrackerOptions& o) {
   require(std::isfinite(o.chebyshev_rho) && o.chebyshev_rho >= 0.f && o.chebyshev_rho < 1.f,
           "TrackerOptions::chebyshev_rho", "must be in [0, 1) (got " + format_number(o.chebyshev_rho) + ")",
           "use 0 (plain Jacobi) or e.g. 0.998");
+  require(o.cg_max_iterations >= 1 && o.cg_rings >= 1, "TrackerOptions CG",
+          "cg_max_iterations and cg_rings must be >= 1", "use e.g. 200 and 2");
   require(o.smoothing.beta_diffusion_steps >= 0 && o.smoothing.smoothing_steps >= 0, "SmoothingOptions",
           "step counts must be >= 0", "pass non-negative counts");
 }
@@ -136,6 +141,22 @@ class ActiveSet {
     active.swap(next);
   }
 
+  /// Adds the one-ring neighbours of every vertex of `active` (sorted ascending on return).
+  void dilate(std::vector<int>& active) {
+    std::vector<int> next;
+    next.reserve(active.size() * 2);
+    auto add = [&](int v) {
+      if (!mark_[v]) mark_[v] = 1, next.push_back(v);
+    };
+    for (int i : active) {
+      add(i);
+      for (int k = adj_.offsets[i]; k < adj_.offsets[i + 1]; ++k) add(adj_.neighbors[k]);
+    }
+    for (int v : next) mark_[v] = 0;
+    std::sort(next.begin(), next.end());
+    active.swap(next);
+  }
+
  private:
   const Adjacency& adj_;
   std::vector<std::uint8_t> mark_;
@@ -160,6 +181,11 @@ TrackStats IsoSurfaceTracker::track(const FieldFunction& field, const std::vecto
   // Only the active vertices are written; for the others next = cur = prev.
   std::vector<Vec3f> prev = cur, next = cur, grads(n), normal(n, Vec3f{});
   std::vector<float> values(n), moves(n, 0.f), damping(n, 1.f);  // moves: squared lengths
+  std::vector<float> last_residual(n, 0.f), newton_scale(n, 1.f);
+  // CG relaxation: a vertex whose Newton steps overshoot (the residual changes sign without
+  // halving: a 2-cycle across a kink of the field) has its Newton steps halved for the rest of the
+  // call, down to 1/16; the Jacobi relaxation keeps the paper's plain Newton steps.
+  const bool damp_overshoot = options_.relaxation == Relaxation::kConjugateGradient;
   std::vector<std::uint8_t> fc(n, 0), moved(n, 0), touched(n, 0);
   // Compact per-iteration buffers of the active vertices (field input and output).
   // Allocated at the first sparse iteration (a dense call never touches them).
@@ -179,6 +205,7 @@ TrackStats IsoSurfaceTracker::track(const FieldFunction& field, const std::vecto
   std::vector<std::uint8_t> linear(n, 0);  // gradient turned by < kChebyshevMaxTurnDeg last time
   float omega = 1.f;                       // Chebyshev weight of the current iteration (1: plain Jacobi)
   ActiveSet set(n, adj_);
+  const bool cg = options_.relaxation == Relaxation::kConjugateGradient;
   std::vector<int> active = set.all();
 
   // Per directed edge (i, j), constant during the call: ½ (Ri + Rj)(pi - pj) (= pi - pj exactly
@@ -221,6 +248,8 @@ TrackStats IsoSurfaceTracker::track(const FieldFunction& field, const std::vecto
   // in place on `next`.
   // With every vertex active (`dense`) the field reads and writes the per-vertex arrays directly;
   // otherwise the active vertices are gathered into the compact buffers.
+  // `disp` (CG relaxation): per-vertex displacement applied instead of the Jacobi step.
+  std::vector<Vec3f> disp;
   auto kernel = [&](bool jacobi, bool dense, std::size_t b, std::size_t e) {
     const Vec3f* cu = cur.data();
     const Vec3f* pv = prev.data();
@@ -234,7 +263,9 @@ TrackStats IsoSurfaceTracker::track(const FieldFunction& field, const std::vecto
       const std::size_t i = dense ? a : static_cast<std::size_t>(act[a]);
       const Vec3f p = cu[i];
       Vec3f q = p;
-      if (jacobi && relaxes(i)) {
+      if (jacobi && !disp.empty()) {
+        q = p + disp[i];
+      } else if (jacobi && relaxes(i)) {
         const Vec3f nrm = nrms[i];
         const float scale = mask_[i] * damping[i];
         q = p + jacobi_delta(cu, i, p) * scale;
@@ -273,7 +304,12 @@ TrackStats IsoSurfaceTracker::track(const FieldFunction& field, const std::vecto
         damping[i] = std::max(damping[i] * 0.5f, options_.min_contact_damping);
       }
       {
-        Vec3f step = g * (options_.sigma * damping[i] * (iso_[i] - f) / g2);
+        const float r = iso_[i] - f;
+        if (damp_overshoot && seen && r * last_residual[i] < 0.f &&
+            std::abs(r) > 0.5f * std::abs(last_residual[i]))
+          newton_scale[i] = std::max(newton_scale[i] * 0.5f, 1.f / 16.f);
+        last_residual[i] = r;
+        Vec3f step = g * (options_.sigma * damping[i] * newton_scale[i] * r / g2);
         const float len2 = squared_norm(step);
         if (len2 > max_step_[i] * max_step_[i]) step = step * (max_step_[i] / std::sqrt(len2));
         nx[i] += step;
@@ -352,7 +388,51 @@ TrackStats IsoSurfaceTracker::track(const FieldFunction& field, const std::vecto
     for (std::size_t i = 0; i < n; ++i)
       if (start[i]) active.push_back(static_cast<int>(i));
   }
-  for (int k = 0; k < options_.max_iterations; ++k) {
+  if (cg) {
+    // Conjugate-gradient relaxation: per iteration, the tangential ARAP system of the active
+    // vertices grown by cg_rings - 1 rings (their neighbours outside held in place) is solved by
+    // CG, then every active vertex takes one Newton step (one field evaluation per vertex and
+    // iteration). Iterations stop when no vertex moves by more than the tolerance.
+    disp.assign(n, Vec3f{});
+    std::vector<int> local(n, -1), unknowns;
+    std::vector<float> scale(n, 1.f);
+    std::vector<Vec3f> d;
+    detail::TangentProblem tp;
+    tp.adj = &adj_;
+    tp.weights = w;
+    tp.weight_sums = wsum;
+    tp.targets = tg;
+    tp.normals = nrms;
+    tp.free3d = contact;
+    tp.scale = scale.data();
+    tp.tolerance = tol;
+    tp.max_iterations = options_.cg_max_iterations;
+    for (int k = 0; k < options_.max_iterations; ++k) {
+      for (int r = 1; r < options_.cg_rings && !active.empty(); ++r) set.dilate(active);
+      if (active.empty()) {
+        stats.converged = true;
+        break;
+      }
+      unknowns.clear();
+      for (int i : active)
+        if (relaxes(i) && normal[i] != Vec3f{}) {
+          unknowns.push_back(i);
+          scale[i] = mask_[i] * damping[i];
+        }
+      tp.positions = cur.data();
+      stats.solver_iterations += detail::solve_tangential_cg(tp, unknowns, local, d);
+      for (std::size_t a = 0; a < unknowns.size(); ++a) disp[std::size_t(unknowns[a])] = d[a];
+      stats.vertex_updates += static_cast<long>(active.size());
+      stats.max_move = run(true);
+      for (int i : unknowns) disp[std::size_t(i)] = Vec3f{};
+      stats.iterations = k + 1;
+      if (stats.max_move <= tol) {
+        stats.converged = true;
+        break;
+      }
+    }
+  }
+  for (int k = 0; k < (cg ? 0 : options_.max_iterations); ++k) {
     if (active.empty()) {
       stats.converged = true;
       break;
@@ -378,7 +458,31 @@ TrackStats IsoSurfaceTracker::track(const FieldFunction& field, const std::vecto
   // Folds: the vertices of a triangle that the relaxation left inverted (typically at a crease
   // where no consecutive gradients differed by the contact angle) are smoothed like contacts;
   // triangles already inverted at rest (mark_rest_inversions) are not folds.
-  std::vector<std::uint8_t> inverted = detail::inverted_triangles(field, cur, triangles_, options_.grain);
+  // Only the triangles that may be inverted are tested at their centroid: those whose normal
+  // deviates by more than kFoldCandidateDeg from the outward direction -∇f/|∇f| last evaluated at
+  // one of their vertices, or with a contact or lost vertex. Elsewhere the field would have to turn
+  // by more than that angle inside the triangle, which it does only across contact creases.
+  std::vector<int> candidates;
+  if (!options_.test_all_triangles) {
+    const float cos_candidate = std::cos(kFoldCandidateDeg * 3.14159265358979f / 180.f);
+    for (Eigen::Index f = 0; f < triangles_.rows(); ++f) {
+      const int v0 = triangles_(f, 0), v1 = triangles_(f, 1), v2 = triangles_(f, 2);
+      const Vec3f c = cross(cur[v1] - cur[v0], cur[v2] - cur[v0]);
+      const float len = std::sqrt(squared_norm(c));
+      const std::size_t t = static_cast<std::size_t>(f);
+      bool candidate = !(len > 0.f) || (!last_inverted_.empty() && last_inverted_[t]) ||
+                       (!rest_inverted_.empty() && rest_inverted_[t]);
+      for (int v : {v0, v1, v2}) {
+        if (candidate) break;
+        const Vec3f nv = normal[v];
+        candidate =
+            contact[v] || fc[v] || flags_.lost[v] || nv == Vec3f{} || -dot(c, nv) < cos_candidate * len;
+      }
+      if (candidate) candidates.push_back(static_cast<int>(f));
+    }
+  }
+  std::vector<std::uint8_t> inverted = detail::inverted_triangles(
+      field, cur, triangles_, options_.grain, options_.test_all_triangles ? nullptr : &candidates);
   if (options_.fold_contacts) {
     for (Eigen::Index f = 0; f < triangles_.rows(); ++f) {
       const std::size_t t = static_cast<std::size_t>(f);
@@ -394,6 +498,7 @@ TrackStats IsoSurfaceTracker::track(const FieldFunction& field, const std::vecto
       if (flags_.beta[i] > 0.f) touched[i] = 1;
   detail::final_stats_touched(field, cur, triangles_, vertex_faces_, iso_, values, touched, options_.grain,
                               flags_, stats, inverted);
+  last_inverted_ = inverted;
   for (std::size_t i = 0; i < n; ++i)
     if (!detail::finite(cur[i])) cur[i] = detail::row(positions, static_cast<Eigen::Index>(i));
   detail::from_points(cur, positions);

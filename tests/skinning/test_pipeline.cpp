@@ -152,4 +152,9 @@ TEST_CASE("pipeline: bad input to the skinner is rejected naming the item", "[sk
   CHECK(s.operator_for("Root", TreeKind::k2014) == JointOperator::kContact);
   CHECK(s.operator_for("Root", TreeKind::k2013) == JointOperator::kBlend);
   CHECK(s.relaxation_for("Bone1") == 0.5f);
+  CHECK(s.tracker.relaxation == isokit::track::Relaxation::kJacobi);
+  CHECK(setup_from_json(R"({"tracker": {"relaxation": "cg"}})", "s.json").tracker.relaxation ==
+        isokit::track::Relaxation::kConjugateGradient);
+  CHECK_THROWS_WITH(setup_from_json(R"({"tracker": {"relaxation": "gauss"}})", "s.json"),
+                    Catch::Contains("s.json.tracker.relaxation") && Catch::Contains("cg"));
 }

@@ -349,6 +349,36 @@ TEST_CASE("tracker: serial and parallel runs are bit-identical", "[track][tracke
   for (int deg = 120; deg >= 0; deg -= 30) compare(deg);
 }
 
+TEST_CASE("tracker: CG relaxation passes the elbow sweep checks, with fewer field evaluations",
+          "[track][tracker][elbow]") {
+  // 2014 §5.2's alternative to Jacobi: the same property checks (no inverted triangle, residual,
+  // contacts in the fold, rest recovery) at 90° and 150°.
+  TrackerOptions cg = elbow_options(256);
+  cg.relaxation = Relaxation::kConjugateGradient;
+  const int max_deg = GENERATE(90, 150);
+  INFO("max angle " << max_deg);
+  const SweepResult with_cg = elbow_sweep(max_deg, cg);
+  const SweepResult jacobi = elbow_sweep(max_deg, elbow_options(256));
+  INFO("vertex updates: CG " << with_cg.vertex_updates << ", Jacobi " << jacobi.vertex_updates);
+  CHECK(with_cg.vertex_updates < jacobi.vertex_updates / 2);
+}
+
+TEST_CASE("tracker: CG relaxation is bit-identical serial and parallel", "[track][tracker]") {
+  TrackerOptions o0 = elbow_options(0), o1 = elbow_options(37);
+  o0.relaxation = o1.relaxation = Relaxation::kConjugateGradient;
+  Elbow a, b;
+  IsoSurfaceTracker serial(a.mesh.V, a.mesh.F, a.iso, o0);
+  IsoSurfaceTracker parallel(b.mesh.V, b.mesh.F, b.iso, o1);
+  for (int deg : {40, 80, 120, 150, 100, 50, 0}) {
+    INFO("angle " << deg);
+    const TrackStats sa = a.step(serial, float(deg) * kPi / 180.f);
+    const TrackStats sb = b.step(parallel, float(deg) * kPi / 180.f);
+    CHECK(a.P == b.P);
+    CHECK(sa.solver_iterations == sb.solver_iterations);
+    CHECK(sa.solver_iterations > 0);
+  }
+}
+
 TEST_CASE("tracker: cotangent weights are symmetric, non-negative, finite", "[track][tracker]") {
   test::Mesh m = capsule_mesh(0.3f, 0.5f, 12, 6, 3);
   // A degenerate sliver: move one vertex onto its neighbour's position line.

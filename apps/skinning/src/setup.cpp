@@ -152,8 +152,15 @@ SkinSetup setup_from_json(const std::string& text, const std::string& source) {
     const std::string w = source + ".tracker";
     check_keys(t,
                {"max_iterations", "tolerance", "sigma", "contact_angle_deg", "initial_newton_steps",
-                "smoothing_steps", "beta_diffusion_steps", "angle_contacts"},
+                "smoothing_steps", "beta_diffusion_steps", "angle_contacts", "relaxation"},
                w);
+    std::string relaxation = "jacobi";
+    read(t, "relaxation", relaxation, w);
+    if (relaxation == "cg")
+      s.tracker.relaxation = track::Relaxation::kConjugateGradient;
+    else
+      require(relaxation == "jacobi", w + ".relaxation", "unknown solver '" + relaxation + "'",
+              "use jacobi (2014) or cg");
     read(t, "max_iterations", s.tracker.max_iterations, w);
     read(t, "tolerance", s.tracker.tolerance, w);
     read(t, "sigma", s.tracker.sigma, w);

@@ -36,6 +36,7 @@ struct TrackStats {
   /// Vertex updates of the relaxation (2014 tracker: the sum of the active-set sizes over its
   /// iterations, at most `iterations * #V`; 2013 projector: 0).
   long vertex_updates{0};
+  long solver_iterations{0};  ///< CG iterations summed over the relaxation (Relaxation::kConjugateGradient)
   bool converged{false};      ///< largest move fell under the tolerance before the iteration cap
   float max_move{0};          ///< largest vertex move in the last iteration
   float max_residual{0};      ///< max |f(v) - iso_v| over vertices outside the smoothed contact region

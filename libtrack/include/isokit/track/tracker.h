@@ -36,6 +36,12 @@ struct SmoothingOptions {
   int smoothing_steps{3};       ///< v <- (1 - β) v + β centroid(one-ring), repeated
 };
 
+/// How the tangential ARAP energy is minimised between Newton projections (2014 §5.2).
+enum class Relaxation {
+  kJacobi,            ///< one Jacobi sweep per iteration (2014), Chebyshev-accelerated
+  kConjugateGradient  ///< the active vertices' tangent-plane system solved by CG per iteration
+};
+
 struct TrackerOptions {
   float sigma{1.0f};             ///< Newton step scale (2014 uses plain Newton iterations: 1)
   int initial_newton_steps{10};  ///< stage-2 projection steps before the relaxation
@@ -62,6 +68,19 @@ struct TrackerOptions {
   /// Vertices of triangles still inverted after the relaxation (a crease the angle rule missed)
   /// are contact vertices too, so that the contact smoothing sees them (not in the papers).
   bool fold_contacts{true};
+  /// Fold test and inverted-triangle statistics: false = only the triangles whose normal deviates
+  /// by more than 45° from -∇f at one of their vertices (or with a contact or lost vertex, or
+  /// inverted at rest or in the last call) are tested at their centroid — about 5 % of them on a
+  /// bent humanoid; a triangle inverted only at its centroid (rare: a few per 10⁴ calls on the
+  /// humanoid) is then missed. true = every triangle (exact, two field evaluations per vertex more).
+  bool test_all_triangles{false};
+  /// Relaxation solver. 2014 runs one Jacobi sweep per Newton projection and names CG as the
+  /// faster alternative (§5.2); see docs/tracking.md for the measured trade-off.
+  Relaxation relaxation{Relaxation::kJacobi};
+  int cg_max_iterations{200};  ///< CG iterations per relaxation iteration (kConjugateGradient)
+  /// The CG system covers the vertices that moved by more than the tolerance grown by this many
+  /// rings (≥ 1; kConjugateGradient).
+  int cg_rings{2};
 };
 
 /// Stateful tracker: precomputes weights and adjacency, then tracks many times.
@@ -107,6 +126,7 @@ class IsoSurfaceTracker {
   VertexFlags flags_;
   Adjacency vertex_faces_;                   // CSR: the triangles around each vertex
   std::vector<std::uint8_t> rest_inverted_;  // per triangle (empty: none recorded)
+  std::vector<std::uint8_t> last_inverted_;  // per triangle, at the end of the last call
 };
 
 }  // namespace isokit::track

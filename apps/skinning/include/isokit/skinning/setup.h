@@ -11,7 +11,8 @@
 ///   contact "joints": { "LeftForeArm": { "operator": "bulge", "relaxation": 0.5 } }, "fit": { "samples": 50,
 ///   "cull_h": 0.05, "grid_resolution": 32, "seed": 1 }, "operators": { "resolution": 128, "slices": 128 },
 ///   "tracker": { "max_iterations": 100, "tolerance": 1e-5, "sigma": 1.0, "contact_angle_deg": 55,
-///                "initial_newton_steps": 10, "smoothing_steps": 3, "beta_diffusion_steps": 2 },
+///                "initial_newton_steps": 10, "smoothing_steps": 3, "beta_diffusion_steps": 2,
+///                "relaxation": "jacobi" },  // or "cg" (track::Relaxation)
 ///   "projector": { "sigma": 0.35, "max_iterations": 50, "contact_angle_deg": 55 },
 ///   "substeps": { "paper_rule": true, "min_step_rad": 0.05, "max_step_rad": 0 } }
 /// ```
