@@ -42,7 +42,7 @@ void check_options(const TrackerOptions& o) {
           "must be in (0, 1] (got " + format_number(o.min_contact_damping) + ")", "use e.g. 0.25");
   require(std::isfinite(o.chebyshev_rho) && o.chebyshev_rho >= 0.f && o.chebyshev_rho < 1.f,
           "TrackerOptions::chebyshev_rho", "must be in [0, 1) (got " + format_number(o.chebyshev_rho) + ")",
-          "use 0 (plain Jacobi) or e.g. 0.998");
+          "use 0 (plain Jacobi) or e.g. 0.995");
   require(o.cg_max_iterations >= 1 && o.cg_rings >= 1, "TrackerOptions CG",
           "cg_max_iterations and cg_rings must be >= 1", "use e.g. 200 and 2");
   require(o.smoothing.beta_diffusion_steps >= 0 && o.smoothing.smoothing_steps >= 0, "SmoothingOptions",

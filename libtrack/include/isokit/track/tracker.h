@@ -64,7 +64,7 @@ struct TrackerOptions {
   float min_contact_damping{0.25f};
   /// Chebyshev semi-iterative acceleration of the Jacobi relaxation (Wang 2015, not in 2014):
   /// the assumed spectral radius of the Jacobi iteration, in [0, 1). 0 = plain Jacobi (2014).
-  float chebyshev_rho{0.998f};
+  float chebyshev_rho{0.995f};
   /// Vertices of triangles still inverted after the relaxation (a crease the angle rule missed)
   /// are contact vertices too, so that the contact smoothing sees them (not in the papers).
   bool fold_contacts{true};
