@@ -125,26 +125,18 @@ class ActiveSet {
       std::fill(moved.begin(), moved.end(), std::uint8_t{0});
       return;
     }
-    std::vector<int> next;
-    next.reserve(count * 8);
-    auto add = [&](int v) {
-      if (!mark_[v]) mark_[v] = 1, next.push_back(v);
-    };
+    std::vector<int> seeds;
+    seeds.reserve(count);
     for (int i : active)
-      if (moved[i]) {
-        add(i);
-        for (int k = adj_.offsets[i]; k < adj_.offsets[i + 1]; ++k) add(adj_.neighbors[k]);
-      }
-    for (int v : next) mark_[v] = 0;
-    for (int i : active) moved[i] = 0;
-    std::sort(next.begin(), next.end());
-    active.swap(next);
+      if (moved[i]) seeds.push_back(i), moved[i] = 0;
+    dilate(seeds);
+    active.swap(seeds);
   }
 
   /// Adds the one-ring neighbours of every vertex of `active` (sorted ascending on return).
   void dilate(std::vector<int>& active) {
     std::vector<int> next;
-    next.reserve(active.size() * 2);
+    next.reserve(active.size() * 8);
     auto add = [&](int v) {
       if (!mark_[v]) mark_[v] = 1, next.push_back(v);
     };
@@ -181,11 +173,11 @@ TrackStats IsoSurfaceTracker::track(const FieldFunction& field, const std::vecto
   // Only the active vertices are written; for the others next = cur = prev.
   std::vector<Vec3f> prev = cur, next = cur, grads(n), normal(n, Vec3f{});
   std::vector<float> values(n), moves(n, 0.f), damping(n, 1.f);  // moves: squared lengths
-  std::vector<float> last_residual(n, 0.f), newton_scale(n, 1.f);
+  const bool cg = options_.relaxation == Relaxation::kConjugateGradient;
   // CG relaxation: a vertex whose Newton steps overshoot (the residual changes sign without
   // halving: a 2-cycle across a kink of the field) has its Newton steps halved for the rest of the
   // call, down to 1/16; the Jacobi relaxation keeps the paper's plain Newton steps.
-  const bool damp_overshoot = options_.relaxation == Relaxation::kConjugateGradient;
+  std::vector<float> last_residual(n, 0.f), newton_scale(n, 1.f);
   std::vector<std::uint8_t> fc(n, 0), moved(n, 0), touched(n, 0);
   // Compact per-iteration buffers of the active vertices (field input and output).
   // Allocated at the first sparse iteration (a dense call never touches them).
@@ -205,7 +197,6 @@ TrackStats IsoSurfaceTracker::track(const FieldFunction& field, const std::vecto
   std::vector<std::uint8_t> linear(n, 0);  // gradient turned by < kChebyshevMaxTurnDeg last time
   float omega = 1.f;                       // Chebyshev weight of the current iteration (1: plain Jacobi)
   ActiveSet set(n, adj_);
-  const bool cg = options_.relaxation == Relaxation::kConjugateGradient;
   std::vector<int> active = set.all();
 
   // Per directed edge (i, j), constant during the call: ½ (Ri + Rj)(pi - pj) (= pi - pj exactly
@@ -305,8 +296,7 @@ TrackStats IsoSurfaceTracker::track(const FieldFunction& field, const std::vecto
       }
       {
         const float r = iso_[i] - f;
-        if (damp_overshoot && seen && r * last_residual[i] < 0.f &&
-            std::abs(r) > 0.5f * std::abs(last_residual[i]))
+        if (cg && seen && r * last_residual[i] < 0.f && std::abs(r) > 0.5f * std::abs(last_residual[i]))
           newton_scale[i] = std::max(newton_scale[i] * 0.5f, 1.f / 16.f);
         last_residual[i] = r;
         Vec3f step = g * (options_.sigma * damping[i] * newton_scale[i] * r / g2);
@@ -458,10 +448,11 @@ TrackStats IsoSurfaceTracker::track(const FieldFunction& field, const std::vecto
   // Folds: the vertices of a triangle that the relaxation left inverted (typically at a crease
   // where no consecutive gradients differed by the contact angle) are smoothed like contacts;
   // triangles already inverted at rest (mark_rest_inversions) are not folds.
-  // Only the triangles that may be inverted are tested at their centroid: those whose normal
-  // deviates by more than kFoldCandidateDeg from the outward direction -∇f/|∇f| last evaluated at
-  // one of their vertices, or with a contact or lost vertex. Elsewhere the field would have to turn
-  // by more than that angle inside the triangle, which it does only across contact creases.
+  // Unless test_all_triangles, only the triangles that may be inverted are tested at their
+  // centroid: those whose normal deviates by more than kFoldCandidateDeg from the outward
+  // direction -∇f/|∇f| last evaluated at one of their vertices, with a contact or lost vertex, or
+  // inverted at rest or at the end of the last call. Elsewhere the field would have to turn by
+  // more than that angle inside the triangle, which it does only across contact creases.
   std::vector<int> candidates;
   if (!options_.test_all_triangles) {
     const float cos_candidate = std::cos(kFoldCandidateDeg * 3.14159265358979f / 180.f);
