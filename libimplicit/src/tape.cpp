@@ -298,25 +298,8 @@ void Tape::set_transform_of(int id, const Rigid3f& xf) {
 
 namespace {
 
-/// Index of the lowest / highest set bit of m != 0.
-int lowest_bit(std::uint64_t m) {
-#if defined(__GNUC__)
-  return __builtin_ctzll(m);
-#else
-  int i = 0;
-  while (!(m & 1)) m >>= 1, ++i;
-  return i;
-#endif
-}
-int highest_bit(std::uint64_t m) {
-#if defined(__GNUC__)
-  return 63 - __builtin_clzll(m);
-#else
-  int i = 0;
-  while (m >>= 1) ++i;
-  return i;
-#endif
-}
+using tape_detail::highest_bit;
+using tape_detail::lowest_bit;
 
 /// Bit k set when leaf k's local box contains its local point `q_k = R_k^T (p - t_k)`, written to
 /// q (3 rows of `m` floats). `frames`: see Tape::leaf_frames_. The same operations, in the same
@@ -361,6 +344,23 @@ std::uint64_t local_points(const float* frames, std::size_t m, const Vec3f& p, f
 }
 
 }  // namespace
+
+TapeSparseLayout Tape::sparse_layout() const {
+  require(sparse_, "tape", "is not evaluated sparsely (2 to 63 leaves and a root node are needed)",
+          "compose between 2 and 63 primitives");
+  TapeSparseLayout l;
+  l.leaves = leaves_.size();
+  l.frame_stride = frame_stride_;
+  l.frames = leaf_frames_.data();
+  l.lca = lca_.data();
+  l.nodes = sparse_nodes_.data();
+  l.node_count = sparse_nodes_.size();
+  l.leaf_records = leaves_.data();
+  l.controllers = controllers_.data();
+  l.grids = grids_.data();
+  l.operator_count = grids_.size();
+  return l;
+}
 
 FieldSample Tape::eval(const Vec3f& p) const {
   return sparse_ ? eval_sparse(p) : eval(p, nullptr, true);

@@ -11,6 +11,7 @@
 #include <set>
 #include <vector>
 
+#include "implicit/tree_fixtures.h"
 #include "isokit/core/error.h"
 #include "isokit/implicit/grid_field.h"
 #include "isokit/implicit/primitives.h"
@@ -21,70 +22,13 @@
 
 using namespace isokit;
 using namespace isokit::implicit;
+using isokit::test::random_op;
+using isokit::test::random_rigid;
+using isokit::test::random_tree;
+using isokit::test::sampled_blend_grid;
 namespace ops = isokit::operators;
 
-namespace {
-
-/// A grid operator sampled from the 2013 gradient blend (5 slices in d, 33 nodes per axis).
-std::shared_ptr<const ops::GridOperator> sampled_blend_grid() {
-  const int nd = 5, nf = 33;
-  std::vector<float> data(std::size_t(nd * nf * nf));
-  for (int k = 0; k < nd; ++k)
-    for (int i = 0; i < nf; ++i)
-      for (int j = 0; j < nf; ++j)
-        data[std::size_t((k * nf + i) * nf + j)] =
-            ops::gradient_blend_2013(float(i) / (nf - 1), float(j) / (nf - 1), float(k) / (nd - 1)).g;
-  return std::make_shared<const ops::GridOperator>(nd, nf, std::move(data));
-}
-
-Rigid3f random_rigid(test::Rng& rng, double spread) {
-  const Mat3T<double> R = rng.rotation();
-  Rigid3f x;
-  for (int i = 0; i < 9; ++i) x.R.m[i] = float(R.m[i]);
-  x.t = test::to_float(rng.vec(-spread, spread));
-  return x;
-}
-
-NodeOperator random_op(test::Rng& rng, bool constant_d) {
-  const auto ctrl = ops::Controller::preset(constant_d ? "constant1" : "blend2013");
-  switch (rng.integer(0, 4)) {
-    case 0:
-      return NodeOperator::max();
-    case 1:
-      return NodeOperator::sum_blend();
-    case 2:
-      return NodeOperator::clean_union();
-    case 3:
-      return NodeOperator::gradient_blend(ctrl);
-    default:
-      return NodeOperator::grid_operator(sampled_blend_grid(), ctrl, "blend-grid");
-  }
-}
-
-/// A random tree of `n` capsules spread over a few units (random shape of the tree); with
-/// `grid_leaves`, every fourth capsule is sampled into a 12³ grid (inline grid leaves of the tape).
-CompositionTree random_tree(test::Rng& rng, int n, bool constant_d, bool grid_leaves = true) {
-  std::vector<CompositionTree> items;
-  for (int i = 0; i < n; ++i) {
-    const float len = float(rng.uniform(0.3, 1.2)), rad = float(rng.uniform(0.15, 0.4));
-    FieldPtr cap = std::make_shared<const CapsuleField>(Vec3f{0, 0, 0}, Vec3f{0, 0, len}, rad);
-    if (grid_leaves && i % 4 == 3)
-      cap = std::make_shared<const GridField>(*cap, Box3f{}, GridFieldOptions{12, 0});  // grid leaf
-    items.push_back(CompositionTree::leaf(cap, random_rigid(rng, 1.5), i));
-  }
-  while (items.size() > 1) {
-    const std::size_t a = std::size_t(rng.integer(0, int(items.size()) - 1));
-    CompositionTree ta = items[a];
-    items.erase(items.begin() + long(a));
-    const std::size_t b = std::size_t(rng.integer(0, int(items.size()) - 1));
-    CompositionTree tb = items[b];
-    items.erase(items.begin() + long(b));
-    items.push_back(CompositionTree::node(random_op(rng, constant_d), ta, tb));
-  }
-  return items[0];
-}
-
-}  // namespace
+namespace {}  // namespace
 
 TEST_CASE("tape evaluation equals recursive evaluation; pruning changes no result", "[tree]") {
   test::Rng rng(31);
@@ -122,7 +66,7 @@ TEST_CASE("tree gradients agree with central differences (constant-d operators)"
   for (int trial = 0; trial < 4; ++trial) {
     // Analytic leaves: a grid's gradient is its interpolated stored gradient, not the derivative
     // of its trilinear value (see the grid tests).
-    const Tape tape(random_tree(rng, 10, true, false));
+    const Tape tape(random_tree(rng, 10, true, 0));
     for (int i = 0; i < 2000; ++i) {
       const Vec3d p = rng.vec(-3, 3);
       const auto f = [&](const Vec3d& q) { return double(tape.eval(test::to_float(q)).value); };
@@ -310,6 +254,34 @@ TEST_CASE("vectorised and scalar grid interpolation agree bit for bit", "[tree]"
       REQUIRE(c.value == a.value);
     }
   }
+}
+
+TEST_CASE("the host/device layout evaluator equals the tape bit for bit", "[tree]") {
+  // eval_sparse_layout is what the CUDA kernel runs per thread; on the host it must give the
+  // tape's own (vectorised) results exactly, for trees of grid leaves and every operator kind,
+  // and again after the leaves move.
+  test::Rng rng(5);
+  for (int trial = 0; trial < 10; ++trial) {
+    Tape tape(random_tree(rng, rng.integer(2, 40), false, 1));
+    REQUIRE(tape.sparse());
+    for (int moved = 0; moved < 2; ++moved) {
+      const TapeSparseLayout layout = tape.sparse_layout();
+      int nonzero = 0;
+      for (int k = 0; k < 3000; ++k) {
+        const Vec3f p = test::to_float(rng.vec(-2.0, 2.0));
+        const FieldSample a = tape.eval(p), b = eval_sparse_layout(layout, p);
+        REQUIRE(a.value == b.value);
+        REQUIRE(a.gradient == b.gradient);
+        nonzero += a.value != 0.f;
+      }
+      CHECK(nonzero > 300);
+      for (std::size_t k = 0; k < tape.leaves().size(); ++k)
+        tape.set_leaf_transform(k, random_rigid(rng, 1.0));
+    }
+  }
+  const auto cap = std::make_shared<const CapsuleField>(Vec3f{0, 0, 0}, Vec3f{0, 0, 1}, 0.3f);
+  const Tape single(CompositionTree::leaf(cap, Rigid3f{}, 0));
+  CHECK_THROWS_WITH(single.sparse_layout(), Catch::Contains("not evaluated sparsely"));
 }
 
 TEST_CASE("a copied tape outlives the original", "[tree]") {

@@ -14,12 +14,16 @@
 
 namespace isokit {
 
-/// Square roots that resolve to the C functions nvcc provides on the device.
+/// Math that resolves to the C functions nvcc provides on the device (the std:: overloads are
+/// constexpr host functions in libstdc++, which device code may not call).
 ISOKIT_HOSTDEV inline float hd_sqrt(float x) {
   return ::sqrtf(x);
 }
 ISOKIT_HOSTDEV inline double hd_sqrt(double x) {
   return ::sqrt(x);
+}
+ISOKIT_HOSTDEV inline float hd_tan(float x) {
+  return ::tanf(x);
 }
 ISOKIT_HOSTDEV inline float hd_abs(float x) {
   return ::fabsf(x);

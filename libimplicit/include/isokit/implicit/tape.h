@@ -30,6 +30,7 @@
 
 #include "isokit/implicit/field.h"
 #include "isokit/implicit/node_eval.h"
+#include "isokit/implicit/tape_records.h"
 #include "isokit/implicit/tree.h"
 
 namespace isokit::implicit {
@@ -41,15 +42,6 @@ struct TapeInstr {
   std::int32_t op{-1};            ///< index into the controller / grid-operator arrays
   std::int32_t chain_parent{-1};  ///< parent, if this instruction is its first child; else -1
   Box3f box{};                    ///< world support box
-};
-
-/// A leaf: which field, where. Grid leaves carry their plain `GridView` and are evaluated
-/// inline (`grid.nodes != nullptr`); other fields go through `Field::eval`.
-struct TapeLeaf {
-  Rigid3f local_to_world{};
-  std::int32_t field{-1};
-  std::int32_t id{-1};
-  GridView grid{};
 };
 
 class Tape final : public Field {
@@ -77,6 +69,10 @@ class Tape final : public Field {
   const std::vector<TapeInstr>& instructions() const { return instr_; }
   const std::vector<TapeLeaf>& leaves() const { return leaves_; }
   int max_stack() const { return max_stack_; }
+  /// True when `eval` runs the sparse evaluator (see above).
+  bool sparse() const { return sparse_; }
+  /// The sparse evaluator's records. \throw InputError when the tape is not sparse.
+  TapeSparseLayout sparse_layout() const;
 
  private:
   void update_boxes();
@@ -85,13 +81,7 @@ class Tape final : public Field {
   std::uint64_t eval_leaves(const Vec3f& p, FieldSample* samples) const;
   FieldSample compose_sparse(std::uint64_t leaves, const FieldSample* samples) const;
 
-  /// Inner node for the sparse evaluation: operator, and the first leaf under its second child
-  /// (leaves are numbered in post-order, so each subtree holds a range of them).
-  struct SparseNode {
-    OpKind kind{OpKind::Max};
-    std::int32_t op{-1};
-    std::int32_t mid{0};
-  };
+  using SparseNode = TapeSparseNode;
   static constexpr std::size_t kSparseMaxLeaves = 63;
   bool sparse_{false};           ///< at most kSparseMaxLeaves leaves and a root node
   std::size_t frame_stride_{0};  ///< leaf count padded to a multiple of 4

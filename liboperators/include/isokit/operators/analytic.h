@@ -46,7 +46,7 @@ ISOKIT_HOSTDEV inline void arc_center(int kind, float tan_theta, float c, float*
 ISOKIT_HOSTDEV inline float arc_residual(int kind, float tan_theta, float f1, float f2, float c) {
   float k, dk;
   arc_center(kind, tan_theta, c, &k, &dk);
-  return std::sqrt((f1 - k) * (f1 - k) + (f2 - k) * (f2 - k)) - (c - k);
+  return hd_sqrt((f1 - k) * (f1 - k) + (f2 - k) * (f2 - k)) - (c - k);
 }
 
 /// The arc blend, union beyond `c_max` (where k(c_max) = c_max).
@@ -79,11 +79,11 @@ ISOKIT_HOSTDEV inline OpSample arc_blend(int kind, float tan_theta, float c_max,
   const float c = 0.5f * (lo + hi);
   arc_center(kind, tan_theta, c, &k, &dk);
   const float a = f1 - k, b = f2 - k;
-  const float r = std::sqrt(a * a + b * b);
+  const float r = hd_sqrt(a * a + b * b);
   if (!(r > 0.f)) return u;
   // G(f1, f2, C) = r - (C - k) = 0  =>  dC/dfi = -G_fi / G_C.
   const float g_c = -(a + b) * dk / r - 1.f + dk;
-  if (!(std::fabs(g_c) > 1e-12f)) return u;
+  if (!(hd_abs(g_c) > 1e-12f)) return u;
   return OpSample{c, -(a / r) / g_c, -(b / r) / g_c};
 }
 
@@ -105,7 +105,7 @@ ISOKIT_HOSTDEV inline OpSample clean_union(float f1, float f2) {
 /// branches agree at C = 0.5, `k = 0.5 tan θ`).
 ISOKIT_HOSTDEV inline OpSample gradient_blend_2013(float f1, float f2, float d) {
   const float dd = d < 0.f ? 0.f : (d > 1.f ? 1.f : d);
-  const float tan_theta = std::tan(0.78539816339745f * (1.f - dd));
+  const float tan_theta = hd_tan(0.78539816339745f * (1.f - dd));
   return detail::arc_blend(1, tan_theta, 0.7f, f1, f2);
 }
 

@@ -1,0 +1,121 @@
+// SPDX-License-Identifier: MIT
+// DeviceTape, host side: uploads the tape's sparse records (pointers re-targeted to device
+// copies, shared arrays uploaded once) and calls the kernel in tape_kernels.cu.
+#include <map>
+#include <string>
+#include <vector>
+
+#include "isokit/core/error.h"
+#include "isokit/implicit/cuda/device_tape.h"
+#include "tape_view.h"
+
+namespace isokit::implicit::cuda {
+namespace {
+
+/// Owning device buffer, freed on destruction.
+class Buffer {
+ public:
+  Buffer() = default;
+  Buffer(const void* host, std::size_t bytes) { assign(host, bytes); }
+  ~Buffer() { detail::device_free(ptr_); }
+  Buffer(const Buffer&) = delete;
+  Buffer& operator=(const Buffer&) = delete;
+  Buffer(Buffer&& o) noexcept : ptr_(o.ptr_), bytes_(o.bytes_) { o.ptr_ = nullptr, o.bytes_ = 0; }
+  void assign(const void* host, std::size_t bytes) {
+    if (bytes != bytes_) {
+      detail::device_free(ptr_);
+      ptr_ = nullptr;
+      bytes_ = 0;
+      ptr_ = detail::device_alloc(bytes);
+      bytes_ = bytes;
+    }
+    detail::copy_to_device(ptr_, host, bytes);
+  }
+  template <class T>
+  T* as() const {
+    return static_cast<T*>(ptr_);
+  }
+
+ private:
+  void* ptr_{nullptr};
+  std::size_t bytes_{0};
+};
+
+}  // namespace
+
+struct DeviceTape::Impl {
+  TapeSparseLayout view;  // device pointers
+  std::size_t leaf_count{0};
+  Buffer frames, lca, nodes, leaves, controllers, grids;
+  std::vector<Buffer> arrays;                      // leaf grids and operator data, uploaded once
+  std::map<const float*, const float*> device_of;  // host array -> its device copy
+
+  const float* upload_array(const float* host, std::size_t floats) {
+    if (!host) return nullptr;
+    const auto it = device_of.find(host);
+    if (it != device_of.end()) return it->second;
+    arrays.emplace_back(host, floats * sizeof(float));
+    const float* d = arrays.back().as<const float>();
+    device_of[host] = d;
+    return d;
+  }
+  void upload_leaves(const TapeSparseLayout& l) {
+    std::vector<TapeLeaf> records(l.leaf_records, l.leaf_records + l.leaves);
+    for (TapeLeaf& leaf : records) {
+      const std::size_t n = static_cast<std::size_t>(leaf.grid.n);
+      leaf.grid.nodes = upload_array(leaf.grid.nodes, 4 * n * n * n);
+    }
+    leaves.assign(records.data(), records.size() * sizeof(TapeLeaf));
+    frames.assign(l.frames, 18 * l.frame_stride * sizeof(float));
+    view.leaf_records = leaves.as<const TapeLeaf>();
+    view.frames = frames.as<const float>();
+  }
+};
+
+DeviceTape::DeviceTape(const Tape& tape) : impl_(std::make_unique<Impl>()) {
+  const TapeSparseLayout l = tape.sparse_layout();
+  for (std::size_t k = 0; k < l.leaves; ++k)
+    require(l.leaf_records[k].grid.nodes != nullptr, "tape leaf " + std::to_string(k),
+            "is not a sampled grid (only grid leaves run on the device)", "sample the primitives into grids");
+  Impl& d = *impl_;
+  d.leaf_count = l.leaves;
+  d.view.leaves = l.leaves;
+  d.view.frame_stride = l.frame_stride;
+  d.view.node_count = l.node_count;
+  d.view.operator_count = l.operator_count;
+  d.upload_leaves(l);
+  d.lca.assign(l.lca, l.leaves * l.leaves);
+  d.nodes.assign(l.nodes, l.node_count * sizeof(TapeSparseNode));
+  d.controllers.assign(l.controllers, l.operator_count * sizeof(operators::ControllerTable));
+  std::vector<operators::GridOperatorView> grids(l.grids, l.grids + l.operator_count);
+  for (operators::GridOperatorView& g : grids) {
+    if (!g.data) continue;
+    const std::size_t slices = static_cast<std::size_t>(g.nd) * static_cast<std::size_t>(g.nf) * g.nf;
+    g.data = d.upload_array(g.data, slices);
+    g.padded = d.upload_array(g.padded, g.padded_size());
+  }
+  d.grids.assign(grids.data(), grids.size() * sizeof(operators::GridOperatorView));
+  d.view.lca = d.lca.as<const std::uint8_t>();
+  d.view.nodes = d.nodes.as<const TapeSparseNode>();
+  d.view.controllers = d.controllers.as<const operators::ControllerTable>();
+  d.view.grids = d.grids.as<const operators::GridOperatorView>();
+}
+
+DeviceTape::~DeviceTape() = default;
+
+void DeviceTape::update_transforms(const Tape& tape) {
+  const TapeSparseLayout l = tape.sparse_layout();
+  require(l.leaves == impl_->leaf_count, "tape", "has a different structure than the device copy",
+          "build a new DeviceTape");
+  impl_->upload_leaves(l);
+}
+
+void DeviceTape::eval(const Vec3f* points, std::size_t n, FieldSample* out) const {
+  if (n == 0) return;
+  Buffer d_points(points, n * sizeof(Vec3f));
+  Buffer d_out(out, n * sizeof(FieldSample));
+  detail::launch_tape_eval(impl_->view, d_points.as<const Vec3f>(), n, d_out.as<FieldSample>());
+  detail::copy_to_host(out, d_out.as<FieldSample>(), n * sizeof(FieldSample));
+}
+
+}  // namespace isokit::implicit::cuda
