@@ -424,6 +424,12 @@ TEST_CASE("tracker: bad input is rejected naming the item", "[track][tracker][er
   o = TrackerOptions{};
   o.min_contact_damping = 0.f;
   CHECK_THROWS_WITH(IsoSurfaceTracker(m.V, m.F, iso, o), Catch::Contains("min_contact_damping"));
+  o = TrackerOptions{};
+  o.cg_rings = 0;
+  CHECK_THROWS_WITH(IsoSurfaceTracker(m.V, m.F, iso, o), Catch::Contains("cg_rings"));
+  o = TrackerOptions{};
+  o.cg_max_iterations = 0;
+  CHECK_THROWS_WITH(IsoSurfaceTracker(m.V, m.F, iso, o), Catch::Contains("cg_max_iterations"));
 
   IsoSurfaceTracker t(m.V, m.F, iso);
   CHECK_THROWS_WITH(t.set_relaxation_mask(std::vector<float>(n, 2.f)),
