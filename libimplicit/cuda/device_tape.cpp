@@ -17,19 +17,23 @@ class Buffer {
  public:
   Buffer() = default;
   Buffer(const void* host, std::size_t bytes) { assign(host, bytes); }
+  /// Allocates without uploading (an output buffer).
+  explicit Buffer(std::size_t bytes) { resize(bytes); }
   ~Buffer() { detail::device_free(ptr_); }
   Buffer(const Buffer&) = delete;
   Buffer& operator=(const Buffer&) = delete;
   Buffer(Buffer&& o) noexcept : ptr_(o.ptr_), bytes_(o.bytes_) { o.ptr_ = nullptr, o.bytes_ = 0; }
   void assign(const void* host, std::size_t bytes) {
-    if (bytes != bytes_) {
-      detail::device_free(ptr_);
-      ptr_ = nullptr;
-      bytes_ = 0;
-      ptr_ = detail::device_alloc(bytes);
-      bytes_ = bytes;
-    }
+    resize(bytes);
     detail::copy_to_device(ptr_, host, bytes);
+  }
+  void resize(std::size_t bytes) {
+    if (bytes == bytes_) return;
+    detail::device_free(ptr_);
+    ptr_ = nullptr;  // stays empty if the allocation throws
+    bytes_ = 0;
+    ptr_ = detail::device_alloc(bytes);
+    bytes_ = bytes;
   }
   template <class T>
   T* as() const {
@@ -113,7 +117,7 @@ void DeviceTape::update_transforms(const Tape& tape) {
 void DeviceTape::eval(const Vec3f* points, std::size_t n, FieldSample* out) const {
   if (n == 0) return;
   Buffer d_points(points, n * sizeof(Vec3f));
-  Buffer d_out(out, n * sizeof(FieldSample));
+  Buffer d_out(n * sizeof(FieldSample));
   detail::launch_tape_eval(impl_->view, d_points.as<const Vec3f>(), n, d_out.as<FieldSample>());
   detail::copy_to_host(out, d_out.as<FieldSample>(), n * sizeof(FieldSample));
 }
