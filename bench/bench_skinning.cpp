@@ -36,11 +36,12 @@ Skinner& skinner(int vertices, double step) {
 }
 
 /// Bakes `poses` once per benchmark iteration (metrics off); manual time = mean ms per frame;
-/// counters per frame: tracker iterations, sub-steps, vertex updates, and updates per second.
+/// counters per frame: tracker iterations, sub-steps, vertex updates, field evaluations, and
+/// updates per second.
 void bake_and_count(benchmark::State& state, Skinner& sk, Method method, const std::vector<Pose>& poses) {
   BakeOptions o;
   o.metrics = false;
-  double iterations = 0, substeps = 0, updates = 0, vips = 0;
+  double iterations = 0, substeps = 0, updates = 0, evaluations = 0, vips = 0;
   for (auto _ : state) {
     const BakeResult r = sk.bake(method, poses, o);
     state.SetIterationTime(r.mean_ms * 1e-3);
@@ -48,6 +49,7 @@ void bake_and_count(benchmark::State& state, Skinner& sk, Method method, const s
       iterations += s.iterations;
       substeps += s.substeps;
       updates += s.vertex_updates;
+      evaluations += s.field_evaluations;
     }
     vips = r.vertex_iterations_per_second;
   }
@@ -55,6 +57,7 @@ void bake_and_count(benchmark::State& state, Skinner& sk, Method method, const s
   state.counters["iterations_per_frame"] = iterations / frames;
   state.counters["substeps_per_frame"] = substeps / frames;
   state.counters["vertex_updates_per_frame"] = updates / frames;
+  state.counters["field_evaluations_per_frame"] = evaluations / frames;
   state.counters["vertex_updates_per_s"] = vips;
 }
 

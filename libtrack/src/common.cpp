@@ -13,10 +13,48 @@ std::vector<Vec3f> to_points(const Positions& p, const std::string& what) {
   std::vector<Vec3f> out(static_cast<std::size_t>(p.rows()));
   for (Eigen::Index i = 0; i < p.rows(); ++i) {
     out[static_cast<std::size_t>(i)] = row(p, i);
-    require(finite(out[static_cast<std::size_t>(i)]), what + " vertex " + std::to_string(i), "is not finite",
-            "pass finite coordinates");
+    if (!finite(out[static_cast<std::size_t>(i)]))  // message built only on failure (hot path)
+      require(false, what + " vertex " + std::to_string(i), "is not finite", "pass finite coordinates");
   }
   return out;
+}
+
+namespace {
+
+// Spreads the low 21 bits of x to every third bit.
+std::uint64_t spread_bits(std::uint64_t x) {
+  x &= 0x1fffff;
+  x = (x | x << 32) & 0x1f00000000ffffull;
+  x = (x | x << 16) & 0x1f0000ff0000ffull;
+  x = (x | x << 8) & 0x100f00f00f00f00full;
+  x = (x | x << 4) & 0x10c30c30c30c30c3ull;
+  x = (x | x << 2) & 0x1249249249249249ull;
+  return x;
+}
+
+}  // namespace
+
+std::vector<int> spatial_order(const std::vector<Vec3f>& pts) {
+  Vec3f lo{0, 0, 0}, hi{0, 0, 0};
+  if (!pts.empty()) lo = hi = pts[0];
+  for (const Vec3f& p : pts) {
+    lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
+    hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
+  }
+  const float extent = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z, 1e-30f});
+  const double scale = double((1 << 21) - 1) / double(extent);
+  std::vector<std::uint64_t> key(pts.size());
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    const Vec3f d = pts[i] - lo;
+    key[i] = spread_bits(std::uint64_t(double(d.x) * scale)) |
+             spread_bits(std::uint64_t(double(d.y) * scale)) << 1 |
+             spread_bits(std::uint64_t(double(d.z) * scale)) << 2;
+  }
+  std::vector<int> order(pts.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
+  std::sort(order.begin(), order.end(),
+            [&](int a, int b) { return key[a] != key[b] ? key[a] < key[b] : a < b; });
+  return order;
 }
 
 void from_points(const std::vector<Vec3f>& pts, Positions& p) {
@@ -91,40 +129,57 @@ int contact_smoothing(const Adjacency& adj, const std::vector<std::uint8_t>& con
                       std::vector<float>& beta) {
   const std::size_t n = pts.size();
   beta.assign(n, 0.f);
-  for (std::size_t i = 0; i < n; ++i) beta[i] = contact[i] ? 1.f : 0.f;
-  std::vector<float> next(n);
+  // β is 0 beyond beta_diffusion_steps rings of the contact vertices: only that region is
+  // diffused and smoothed (the same arithmetic per vertex as a pass over every vertex).
+  std::vector<int> region;
+  std::vector<std::uint8_t> in(n, 0);
+  for (std::size_t i = 0; i < n; ++i)
+    if (contact[i]) in[i] = 1, region.push_back(static_cast<int>(i));
+  if (region.empty()) return 0;
+  for (int s = 0, begin = 0; s < options.beta_diffusion_steps; ++s) {
+    const int end = static_cast<int>(region.size());
+    for (int a = begin; a < end; ++a)
+      for (int k = adj.offsets[region[a]]; k < adj.offsets[region[a] + 1]; ++k)
+        if (!in[adj.neighbors[k]]) in[adj.neighbors[k]] = 1, region.push_back(adj.neighbors[k]);
+    begin = end;
+  }
+  std::sort(region.begin(), region.end());
+  for (int i : region) beta[i] = contact[i] ? 1.f : 0.f;
+  std::vector<float> next(n, 0.f);
   for (int s = 0; s < options.beta_diffusion_steps; ++s) {
-    parallel_for(n, grain, [&](std::size_t b, std::size_t e) {
-      for (std::size_t i = b; i < e; ++i) {
+    parallel_for(region.size(), grain, [&](std::size_t b, std::size_t e) {
+      for (std::size_t a = b; a < e; ++a) {
+        const int i = region[a];
         float acc = beta[i];
         for (int k = adj.offsets[i]; k < adj.offsets[i + 1]; ++k) acc += beta[adj.neighbors[k]];
-        next[i] = acc / static_cast<float>(1 + adj.degree(static_cast<int>(i)));
+        next[i] = acc / static_cast<float>(1 + adj.degree(i));
       }
     });
     beta.swap(next);
   }
   // Contact vertices keep β = 1 (2013: "β = 1 for vertices stopped at a gradient discontinuity").
-  for (std::size_t i = 0; i < n; ++i)
+  for (int i : region)
     if (contact[i]) beta[i] = 1.f;
-  std::vector<Vec3f> buf(n);
+  std::vector<Vec3f> buf(region.size());
   for (int s = 0; s < options.smoothing_steps; ++s) {
-    parallel_for(n, grain, [&](std::size_t b, std::size_t e) {
-      for (std::size_t i = b; i < e; ++i) {
-        const int deg = adj.degree(static_cast<int>(i));
+    parallel_for(region.size(), grain, [&](std::size_t b, std::size_t e) {
+      for (std::size_t a = b; a < e; ++a) {
+        const int i = region[a];
+        const int deg = adj.degree(i);
         if (beta[i] <= 0.f || deg == 0) {
-          buf[i] = pts[i];
+          buf[a] = pts[i];
           continue;
         }
         Vec3f c{};
         for (int k = adj.offsets[i]; k < adj.offsets[i + 1]; ++k) c += pts[adj.neighbors[k]];
         c = c / static_cast<float>(deg);
-        buf[i] = pts[i] * (1.f - beta[i]) + c * beta[i];
+        buf[a] = pts[i] * (1.f - beta[i]) + c * beta[i];
       }
     });
-    pts.swap(buf);
+    for (std::size_t a = 0; a < region.size(); ++a) pts[region[a]] = buf[a];
   }
   int count = 0;
-  for (std::size_t i = 0; i < n; ++i) count += beta[i] > 0.f ? 1 : 0;
+  for (int i : region) count += beta[i] > 0.f ? 1 : 0;
   return count;
 }
 
@@ -267,7 +322,7 @@ void validate_mesh(const Positions& rest, const Triangles& triangles, std::size_
       iso_size == static_cast<std::size_t>(rest.rows()), "iso values",
       "size " + std::to_string(iso_size) + " differs from the vertex count " + std::to_string(rest.rows()),
       "pass one iso-value per vertex");
-  (void)triangles;
+  validate_triangles(triangles, static_cast<int>(rest.rows()));
 }
 
 }  // namespace detail

@@ -27,6 +27,10 @@ inline Vec3f row(const Positions& p, Eigen::Index i) {
 std::vector<Vec3f> to_points(const Positions& p, const std::string& what);
 void from_points(const std::vector<Vec3f>& pts, Positions& p);
 
+/// A cache-friendly vertex order: the vertices sorted by the Morton code of their position
+/// (21 bits per axis over the bounding box; ties by index). `order[k]` is the k-th vertex.
+std::vector<int> spatial_order(const std::vector<Vec3f>& pts);
+
 /// Mean rest length of each vertex's edges (global mean for isolated vertices).
 std::vector<float> mean_edge_lengths(const std::vector<Vec3f>& rest, const Adjacency& adj);
 float bbox_diagonal(const std::vector<Vec3f>& pts);
@@ -106,6 +110,8 @@ struct TangentProblem {
 int solve_tangential_cg(const TangentProblem& p, const std::vector<int>& unknowns, std::vector<int>& local,
                         std::vector<Vec3f>& d);
 
+/// Every triangle's indices lie in [0, num_vertices) and are distinct; throws naming the triangle.
+void validate_triangles(const Triangles& triangles, int num_vertices);
 void validate_mesh(const Positions& rest, const Triangles& triangles, std::size_t iso_size);
 
 /// Checks the per-call inputs shared by the tracker and the projector: one position per vertex

@@ -4,15 +4,17 @@
 #include <algorithm>
 #include <string>
 
+#include "detail.h"
 #include "isokit/core/error.h"
 
 namespace isokit::track {
 
-Adjacency vertex_adjacency(const Triangles& triangles, int num_vertices) {
+namespace detail {
+
+void validate_triangles(const Triangles& triangles, int num_vertices) {
   require(num_vertices >= 0, "vertex_adjacency num_vertices",
           "is negative (" + std::to_string(num_vertices) + ")", "pass the vertex count");
-  const Eigen::Index nf = triangles.rows();
-  for (Eigen::Index f = 0; f < nf; ++f) {
+  for (Eigen::Index f = 0; f < triangles.rows(); ++f) {
     const int a = triangles(f, 0), b = triangles(f, 1), c = triangles(f, 2);
     for (int v : {a, b, c})
       require(v >= 0 && v < num_vertices, "triangle " + std::to_string(f),
@@ -23,6 +25,13 @@ Adjacency vertex_adjacency(const Triangles& triangles, int num_vertices) {
         "repeats a vertex (" + std::to_string(a) + ", " + std::to_string(b) + ", " + std::to_string(c) + ")",
         "remove degenerate triangles before building the mesh");
   }
+}
+
+}  // namespace detail
+
+Adjacency vertex_adjacency(const Triangles& triangles, int num_vertices) {
+  detail::validate_triangles(triangles, num_vertices);
+  const Eigen::Index nf = triangles.rows();
   // Count directed half-edges per vertex (each triangle gives every corner two neighbours),
   // fill, then sort and deduplicate each row in place.
   std::vector<int> count(static_cast<std::size_t>(num_vertices) + 1, 0);

@@ -2,8 +2,10 @@
 #include "isokit/track/tracker.h"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
+#include <utility>
 
 #include "detail.h"
 #include "isokit/core/parallel.h"
@@ -21,6 +23,14 @@ constexpr float kChebyshevMaxTurnDeg = 10.f;
 // Fold test: a triangle is tested at its centroid when its normal deviates from the outward
 // direction at one of its vertices by more than this (an inverted one deviates by more than 90°).
 constexpr float kFoldCandidateDeg = 45.f;
+
+/// `out[k] = v[order[k]]`.
+template <class T>
+std::vector<T> permuted(const std::vector<T>& v, const std::vector<int>& order) {
+  std::vector<T> out(order.size());
+  for (std::size_t k = 0; k < order.size(); ++k) out[k] = v[std::size_t(order[k])];
+  return out;
+}
 
 void check_options(const TrackerOptions& o) {
   require(std::isfinite(o.sigma) && o.sigma > 0.f && o.sigma <= 1.f, "TrackerOptions::sigma",
@@ -53,19 +63,36 @@ void check_options(const TrackerOptions& o) {
 
 IsoSurfaceTracker::IsoSurfaceTracker(const Positions& rest, const Triangles& triangles,
                                      std::vector<float> iso, TrackerOptions options)
-    : rest_(rest), triangles_(triangles), iso_(std::move(iso)), options_(options) {
+    : triangles_(triangles), iso_(std::move(iso)), options_(options) {
   check_options(options_);
-  detail::validate_mesh(rest_, triangles_, iso_.size());
-  rest_pts_ = detail::to_points(rest_, "rest positions");
-  const std::vector<Vec3f>& pts = rest_pts_;
+  detail::validate_mesh(rest, triangles_, iso_.size());
+  rest_pts_ = detail::to_points(rest, "rest positions");
   for (std::size_t i = 0; i < iso_.size(); ++i)
-    require(std::isfinite(iso_[i]), "iso value " + std::to_string(i),
-            "is not finite (" + format_number(iso_[i]) + ")", "sample iso-values from a finite field");
+    if (!std::isfinite(iso_[i]))
+      require(false, "iso value " + std::to_string(i), "is not finite (" + format_number(iso_[i]) + ")",
+              "sample iso-values from a finite field");
+  if (options_.reorder_vertices) {
+    order_ = detail::spatial_order(rest_pts_);
+    rank_.resize(order_.size());
+    for (std::size_t k = 0; k < order_.size(); ++k) rank_[std::size_t(order_[k])] = static_cast<int>(k);
+    rest_pts_ = permuted(rest_pts_, order_);
+    iso_ = permuted(iso_, order_);
+    for (Eigen::Index f = 0; f < triangles_.rows(); ++f)
+      for (int c = 0; c < 3; ++c) triangles_(f, c) = rank_[std::size_t(triangles_(f, c))];
+  }
+  const std::vector<Vec3f>& pts = rest_pts_;
   adj_ = vertex_adjacency(triangles_, static_cast<int>(pts.size()));
   detail::cotangent_weights(pts, triangles_, adj_, options_.max_cotangent, weights_, weight_sum_);
   max_step_ = detail::mean_edge_lengths(pts, adj_);
-  for (float& s : max_step_) s *= options_.max_step;
   diagonal_ = detail::bbox_diagonal(pts);
+  // Lazy evaluation radius: a tangential move d from where the field was evaluated leaves the
+  // vertex off its iso-surface by about κ |d|² / 2 (κ: the iso-surface's curvature) beyond what the
+  // linearised field predicts; with κ at most 1 / ℓ (ℓ: the vertex's mean edge length: the mesh
+  // resolves the surface) that stays below the tolerance for |d|² ≤ 2 · tolerance · ℓ.
+  lazy_r2_.resize(max_step_.size());
+  for (std::size_t i = 0; i < max_step_.size(); ++i)
+    lazy_r2_[i] = 2.f * options_.tolerance * diagonal_ * max_step_[i];
+  for (float& s : max_step_) s *= options_.max_step;
   mask_.assign(pts.size(), 1.f);
   vertex_faces_ = detail::vertex_faces(triangles_, pts.size());
 }
@@ -78,7 +105,36 @@ void IsoSurfaceTracker::set_relaxation_mask(std::vector<float> mask) {
   for (std::size_t i = 0; i < mask.size(); ++i)
     require(mask[i] >= 0.f && mask[i] <= 1.f, "relaxation mask vertex " + std::to_string(i),
             "is outside [0, 1] (" + format_number(mask[i]) + ")", "use 0 (no tangential move) .. 1");
-  mask_ = std::move(mask);
+  mask_ = order_.empty() ? std::move(mask) : permuted(mask, order_);
+}
+
+Adjacency IsoSurfaceTracker::adjacency() const {
+  if (order_.empty()) return adj_;
+  Adjacency out;
+  const std::size_t n = order_.size();
+  out.offsets.assign(n + 1, 0);
+  for (std::size_t u = 0; u < n; ++u) out.offsets[u + 1] = out.offsets[u] + adj_.degree(rank_[u]);
+  out.neighbors.resize(adj_.neighbors.size());
+  for (std::size_t u = 0; u < n; ++u) {
+    const int k = rank_[u];
+    int* row = out.neighbors.data() + out.offsets[u];
+    for (int e = adj_.offsets[std::size_t(k)]; e < adj_.offsets[std::size_t(k) + 1]; ++e)
+      *row++ = order_[std::size_t(adj_.neighbors[std::size_t(e)])];
+    std::sort(out.neighbors.data() + out.offsets[u], row);
+  }
+  return out;
+}
+
+std::vector<float> IsoSurfaceTracker::weights() const {
+  if (order_.empty()) return weights_;
+  const Adjacency user = adjacency();
+  std::vector<float> out(weights_.size());
+  for (std::size_t u = 0; u < order_.size(); ++u)
+    for (int e = user.offsets[u]; e < user.offsets[u + 1]; ++e) {
+      const int k = rank_[u], j = rank_[std::size_t(user.neighbors[std::size_t(e)])];
+      out[std::size_t(e)] = weights_[std::size_t(detail::find_neighbor(adj_, k, j))];
+    }
+  return out;
 }
 
 void IsoSurfaceTracker::mark_rest_inversions(const FieldFunction& rest_field) {
@@ -100,7 +156,7 @@ class ActiveSet {
 
   /// Rebuilds `active` from the per-vertex flags `moved` (set only inside `active`; all zero on
   /// return).
-  void update(std::vector<int>& active, std::vector<std::uint8_t>& moved, std::size_t grain) {
+  void update(std::vector<int>& active, std::vector<std::uint8_t>& moved) {
     const std::size_t n = dense_.size();
     std::size_t count = 0;
     for (int i : active) count += moved[i];
@@ -108,51 +164,64 @@ class ActiveSet {
       std::fill(moved.begin(), moved.end(), std::uint8_t{0});
       return;
     }
-    if (count * 4 > n) {
-      // Dense pass (pull): a vertex is active if it or a neighbour moved; `moved` is 0 outside
-      // the previous set.
-      parallel_for(n, grain, [&](std::size_t b, std::size_t e) {
-        for (std::size_t i = b; i < e; ++i) {
-          std::uint8_t m = moved[i];
-          for (int k = adj_.offsets[i]; k < adj_.offsets[i + 1] && !m; ++k) m = moved[adj_.neighbors[k]];
-          mark_[i] = m;
-        }
-      });
-      active.clear();
-      for (std::size_t i = 0; i < n; ++i)
-        if (mark_[i]) active.push_back(static_cast<int>(i));
-      std::fill(mark_.begin(), mark_.end(), std::uint8_t{0});
-      std::fill(moved.begin(), moved.end(), std::uint8_t{0});
+    if (small(count)) {
+      seeds_.clear();
+      for (int i : active)
+        if (moved[i]) seeds_.push_back(i), moved[i] = 0;
+      dilate(seeds_);
+      active.swap(seeds_);
       return;
     }
-    std::vector<int> seeds;
-    seeds.reserve(count);
     for (int i : active)
-      if (moved[i]) seeds.push_back(i), moved[i] = 0;
-    dilate(seeds);
-    active.swap(seeds);
+      if (moved[i]) moved[i] = 0, mark_ring(i);
+    collect(active);
   }
 
   /// Adds the one-ring neighbours of every vertex of `active` (sorted ascending on return).
   void dilate(std::vector<int>& active) {
-    std::vector<int> next;
-    next.reserve(active.size() * 8);
+    if (!small(active.size())) {
+      for (int i : active) mark_ring(i);
+      collect(active);
+      return;
+    }
+    next_.clear();
     auto add = [&](int v) {
-      if (!mark_[v]) mark_[v] = 1, next.push_back(v);
+      if (!mark_[v]) mark_[v] = 1, next_.push_back(v);
     };
     for (int i : active) {
       add(i);
       for (int k = adj_.offsets[i]; k < adj_.offsets[i + 1]; ++k) add(adj_.neighbors[k]);
     }
-    for (int v : next) mark_[v] = 0;
-    std::sort(next.begin(), next.end());
-    active.swap(next);
+    for (int v : next_) mark_[v] = 0;
+    std::sort(next_.begin(), next_.end());
+    active.swap(next_);
   }
 
  private:
+  // Few seeds: list their rings and sort; more: mark them (branch-free stores) and scan the marks
+  // (the scan costs about as much as 1/32 of the vertices' rings).
+  bool small(std::size_t seeds) const { return seeds * 32 < mark_.size(); }
+  void mark_ring(int i) {
+    mark_[i] = 1;
+    for (int k = adj_.offsets[i]; k < adj_.offsets[i + 1]; ++k) mark_[adj_.neighbors[k]] = 1;
+  }
+  // `out` <- the marked vertices in ascending order; clears the marks.
+  void collect(std::vector<int>& out) {
+    const std::size_t n = mark_.size();
+    out.resize(n);
+    std::size_t c = 0;
+    for (std::size_t v = 0; v < n; ++v) {
+      out[c] = static_cast<int>(v);
+      c += mark_[v];
+      mark_[v] = 0;
+    }
+    out.resize(c);
+  }
+
   const Adjacency& adj_;
   std::vector<std::uint8_t> mark_;
   std::vector<int> dense_;
+  std::vector<int> seeds_, next_;  // scratch, kept between iterations
 };
 
 }  // namespace
@@ -167,8 +236,12 @@ TrackStats IsoSurfaceTracker::track(const FieldFunction& field, const std::vecto
           "pass one rotation per vertex or none (identity)");
   for (std::size_t i = 0; i < rotations.size(); ++i)
     for (float v : rotations[i].m)
-      require(std::isfinite(v), "rotation " + std::to_string(i), "is not finite", "pass finite rotations");
+      if (!std::isfinite(v))  // message built only on failure (hot path)
+        require(false, "rotation " + std::to_string(i), "is not finite", "pass finite rotations");
   std::vector<Vec3f> cur = detail::to_points(positions, "initial positions");
+  if (!order_.empty()) cur = permuted(cur, order_);
+  // The caller's index of internal vertex i.
+  auto user = [&](std::size_t i) { return order_.empty() ? i : std::size_t(order_[i]); };
   // Three position buffers: x_{k-1} (`prev`, for the Chebyshev step), x_k (`cur`), x_{k+1}.
   // Only the active vertices are written; for the others next = cur = prev.
   std::vector<Vec3f> prev = cur, next = cur, grads(n), normal(n, Vec3f{});
@@ -179,11 +252,17 @@ TrackStats IsoSurfaceTracker::track(const FieldFunction& field, const std::vecto
   // call, down to 1/16; the Jacobi relaxation keeps the paper's plain Newton steps.
   std::vector<float> last_residual(n, 0.f), newton_scale(n, 1.f);
   std::vector<std::uint8_t> fc(n, 0), moved(n, 0), touched(n, 0);
-  // Compact per-iteration buffers of the active vertices (field input and output).
-  // Allocated at the first sparse iteration (a dense call never touches them).
-  std::vector<Vec3f> apts, agrads;
-  std::vector<float> avals;
-  std::vector<std::uint8_t> afc;
+  // Compact per-iteration buffers of the evaluated vertices (field input and output, vertex).
+  std::vector<Vec3f> apts(n), agrads(n);
+  std::vector<float> avals(n);
+  std::vector<std::uint8_t> afc(n);
+  std::vector<int> aidx(n);
+  // Lazy evaluation: where the field was last evaluated and its gradient there, whether the vertex
+  // may take linearised Newton steps (`lazy`), and whether it moved since its last evaluation.
+  const bool lazy_on = options_.lazy_evaluation;
+  std::vector<Vec3f> eval_pts(lazy_on ? n : 0), eval_grads(lazy_on ? n : 0);
+  std::vector<std::uint8_t> lazy(n, 0), pending(n, 0);
+  std::atomic<long> evaluations{0};
   flags_.contact.assign(n, 0);
   flags_.lost.assign(n, 0);
   const std::vector<Vec3f>& rest = rest_pts_;
@@ -192,6 +271,10 @@ TrackStats IsoSurfaceTracker::track(const FieldFunction& field, const std::vecto
   const float min_g2 = options_.min_gradient * options_.min_gradient;
   const float tol = options_.tolerance * diagonal_;
   const float tol2 = tol * tol;
+  // Squared trust radius of the linearisation per vertex: starts at twice the tolerance, then
+  // follows the error measured at each evaluation after lazy steps; at most lazy_r2_.
+  std::vector<float> radius2(lazy_on ? n : 0);
+  for (std::size_t i = 0; i < radius2.size(); ++i) radius2[i] = std::min(4.f * tol2, lazy_r2_[i]);
   const float rho2 = options_.chebyshev_rho * options_.chebyshev_rho;
   const float cos_linear = std::cos(kChebyshevMaxTurnDeg * 3.14159265358979f / 180.f);
   std::vector<std::uint8_t> linear(n, 0);  // gradient turned by < kChebyshevMaxTurnDeg last time
@@ -207,7 +290,8 @@ TrackStats IsoSurfaceTracker::track(const FieldFunction& field, const std::vecto
       for (int k = adj_.offsets[i]; k < adj_.offsets[i + 1]; ++k) {
         const int j = adj_.neighbors[k];
         const Vec3f e_ij = rest[i] - rest[j];
-        targets[k] = has_rot ? (rotations[i] * e_ij + rotations[j] * e_ij) * 0.5f : e_ij;
+        targets[k] =
+            has_rot ? (rotations[user(i)] * e_ij + rotations[user(std::size_t(j))] * e_ij) * 0.5f : e_ij;
       }
   });
 
@@ -236,20 +320,31 @@ TrackStats IsoSurfaceTracker::track(const FieldFunction& field, const std::vecto
 
   // One iteration over the active vertices [b, e) of `active`: optional Jacobi tangential ARAP
   // step (reads `cur` and `prev`, writes `next`), one field evaluation at `next`, one Newton step
-  // in place on `next`.
-  // With every vertex active (`dense`) the field reads and writes the per-vertex arrays directly;
-  // otherwise the active vertices are gathered into the compact buffers.
+  // in place on `next`. The points to evaluate are gathered into the compact buffers (positions
+  // [b, b + count) of the task's range).
+  // Lazy evaluation (options_.lazy_evaluation): a vertex that sat on its iso-surface at its last
+  // evaluation, on a smooth part of the field, and is still within `lazy_r2` of where that
+  // evaluation took place, takes its Newton step on the field linearised there instead
+  // (`force`: evaluate every active vertex).
   // `disp` (CG relaxation): per-vertex displacement applied instead of the Jacobi step.
   std::vector<Vec3f> disp;
-  auto kernel = [&](bool jacobi, bool dense, std::size_t b, std::size_t e) {
+  auto kernel = [&](bool jacobi, bool dense, bool force, std::size_t b, std::size_t e) {
     const Vec3f* cu = cur.data();
     const Vec3f* pv = prev.data();
     Vec3f* nx = next.data();
     const int* act = active.data();
-    Vec3f* in = dense ? nx : apts.data();
-    float* val = dense ? values.data() : avals.data();
-    Vec3f* grd = dense ? grads.data() : agrads.data();
-    std::uint8_t* fcv = dense ? fc.data() : afc.data();
+    Vec3f* in = apts.data();
+    float* val = avals.data();
+    Vec3f* grd = agrads.data();
+    std::uint8_t* fcv = afc.data();
+    int* idx = aidx.data();
+    std::size_t count = b;
+    auto newton_step = [&](std::size_t i, const Vec3f& g, float g2, float r) {
+      Vec3f step = g * (options_.sigma * damping[i] * newton_scale[i] * r / g2);
+      const float len2 = squared_norm(step);
+      if (len2 > max_step_[i] * max_step_[i]) step = step * (max_step_[i] / std::sqrt(len2));
+      return step;
+    };
     for (std::size_t a = b; a < e; ++a) {
       const std::size_t i = dense ? a : static_cast<std::size_t>(act[a]);
       const Vec3f p = cu[i];
@@ -269,14 +364,38 @@ TrackStats IsoSurfaceTracker::track(const FieldFunction& field, const std::vecto
         }
       }
       nx[i] = q;
-      in[a] = q;
+      if (!force && lazy[i]) {
+        const Vec3f d = q - eval_pts[i];
+        if (squared_norm(d) <= radius2[i]) {
+          const Vec3f g = eval_grads[i];
+          nx[i] += newton_step(i, g, squared_norm(g), iso_[i] - (values[i] + dot(g, d)));
+          moves[i] = squared_norm(nx[i] - p);
+          pending[i] = 1;
+          continue;
+        }
+      }
+      in[count] = q;
+      idx[count++] = static_cast<int>(i);
     }
-    detail::eval_field(field, in + b, e - b, val + b, grd + b, fcv + b, 0);
-    for (std::size_t a = b; a < e; ++a) {
-      const std::size_t i = dense ? a : static_cast<std::size_t>(act[a]);
+    detail::eval_field(field, in + b, count - b, val + b, grd + b, fcv + b, 0);
+    for (std::size_t a = b; a < count; ++a) {
+      const std::size_t i = static_cast<std::size_t>(idx[a]);
       const Vec3f g = grd[a];
       const float g2 = squared_norm(g), f = val[a];
-      if (!dense) values[i] = f, fc[i] = fcv[a];
+      if (pending[i] && detail::finite(g) && std::isfinite(f)) {
+        // Trust region of the linearisation: the error it made here, per unit of displacement,
+        // sets how far the vertex may move on the next one (the composed gradient is not the exact
+        // gradient of the composed value: see docs/tracking.md).
+        const Vec3f d = nx[i] - eval_pts[i];
+        const Vec3f ge = eval_grads[i];
+        const float err = std::abs(f - values[i] - dot(ge, d)) / std::sqrt(squared_norm(ge));
+        const float dl = std::sqrt(squared_norm(d));
+        const float r = 0.5f * tol * dl;
+        radius2[i] = err * err * lazy_r2_[i] > r * r ? r * r / (err * err) : lazy_r2_[i];
+      }
+      values[i] = f, fc[i] = fcv[a];
+      pending[i] = 0;
+      lazy[i] = 0;
       if (flags_.lost[i] || !std::isfinite(f) || !detail::finite(g) || !(g2 > min_g2)) {
         flags_.lost[i] = 1;
         nx[i] = cu[i];  // left in place
@@ -294,36 +413,45 @@ TrackStats IsoSurfaceTracker::track(const FieldFunction& field, const std::vecto
         if (options_.angle_contacts) flags_.contact[i] = 1;
         damping[i] = std::max(damping[i] * 0.5f, options_.min_contact_damping);
       }
-      {
-        const float r = iso_[i] - f;
-        if (cg && seen && r * last_residual[i] < 0.f && std::abs(r) > 0.5f * std::abs(last_residual[i]))
-          newton_scale[i] = std::max(newton_scale[i] * 0.5f, 1.f / 16.f);
-        last_residual[i] = r;
-        Vec3f step = g * (options_.sigma * damping[i] * newton_scale[i] * r / g2);
-        const float len2 = squared_norm(step);
-        if (len2 > max_step_[i] * max_step_[i]) step = step * (max_step_[i] / std::sqrt(len2));
-        nx[i] += step;
+      const float r = iso_[i] - f;
+      if (cg && seen && r * last_residual[i] < 0.f && std::abs(r) > 0.5f * std::abs(last_residual[i]))
+        newton_scale[i] = std::max(newton_scale[i] * 0.5f, 1.f / 16.f);
+      last_residual[i] = r;
+      const Vec3f step = newton_step(i, g, g2, r);
+      if (lazy_on && linear[i] && !contact[i] && !fc[i] && squared_norm(step) <= radius2[i]) {
+        lazy[i] = 1;
+        eval_pts[i] = nx[i];
+        eval_grads[i] = g;
       }
+      nx[i] += step;
       normal[i] = nrm;
       moves[i] = squared_norm(nx[i] - cu[i]);  // squared: one square root per iteration below
     }
+    evaluations += static_cast<long>(count - b);
   };
 
   TrackStats stats;
   bool first = true;  // the first evaluation covers every vertex and does not mark it touched
-  auto run = [&](bool jacobi) {
+  // Called when no vertex moved by more than the tolerance: true if the call has converged. With
+  // lazy evaluation, the vertices moved on a linearised field since their last evaluation are
+  // evaluated once more first (they become the active set of a `force`d iteration), unless the
+  // last iteration was that one.
+  auto settle = [&](bool verified) {
+    if (verified || !lazy_on) return true;
+    active.clear();
+    for (std::size_t i = 0; i < n; ++i)
+      if (pending[i]) active.push_back(static_cast<int>(i));
+    return active.empty();
+  };
+  bool force = false;
+  auto run = [&](bool jacobi, bool evaluate_all = false) {
     const bool dense = active.size() == n;
-    if (!dense && apts.empty()) {
-      apts.resize(n);
-      agrads.resize(n);
-      avals.resize(n);
-      afc.resize(n);
-    }
     // Active sets are often a few thousand vertices: smaller tasks keep both cores busy (the grain
     // changes no result).
     const std::size_t grain =
         options_.grain == 0 ? 0 : std::clamp<std::size_t>(active.size() / 16, 64, options_.grain);
-    parallel_for(active.size(), grain, [&](std::size_t b, std::size_t e) { kernel(jacobi, dense, b, e); });
+    parallel_for(active.size(), grain,
+                 [&](std::size_t b, std::size_t e) { kernel(jacobi, dense, evaluate_all, b, e); });
     float mx = 0.f;
     if (dense) {
       // Every vertex was written: rotate the buffers (Jacobi: x_{k+1} from x_k only).
@@ -337,21 +465,17 @@ TrackStats IsoSurfaceTracker::track(const FieldFunction& field, const std::vecto
     } else {
       // Commit after every vertex has read its neighbours. For the inactive vertices prev = cur
       // already (up to their last move, below the tolerance).
-      parallel_for(active.size(), grain, [&](std::size_t b, std::size_t e) {
-        for (std::size_t a = b; a < e; ++a) {
-          const int i = active[a];
-          prev[i] = cur[i];  // prev <- x_k
-          cur[i] = next[i];  // cur <- x_{k+1}
-        }
-      });
+      // (Serial: a copy per vertex costs less than waking the other threads.)
       for (int i : active) {
+        prev[i] = cur[i];  // prev <- x_k
+        cur[i] = next[i];  // cur <- x_{k+1}
         mx = std::max(mx, moves[i]);
         moved[i] = moves[i] > tol2 ? 1 : 0;
         if (!first) touched[i] = 1;
       }
     }
     first = false;
-    set.update(active, moved, options_.grain);
+    set.update(active, moved);
     return std::sqrt(mx);
   };
   for (int k = 0; k < options_.initial_newton_steps && !active.empty(); ++k) {
@@ -398,11 +522,14 @@ TrackStats IsoSurfaceTracker::track(const FieldFunction& field, const std::vecto
     tp.tolerance = tol;
     tp.max_iterations = options_.cg_max_iterations;
     for (int k = 0; k < options_.max_iterations; ++k) {
-      for (int r = 1; r < options_.cg_rings && !active.empty(); ++r) set.dilate(active);
       if (active.empty()) {
-        stats.converged = true;
-        break;
+        if (settle(force)) {
+          stats.converged = true;
+          break;
+        }
+        force = true;
       }
+      for (int r = 1; r < options_.cg_rings; ++r) set.dilate(active);
       unknowns.clear();
       for (int i : active)
         if (relaxes(i) && normal[i] != Vec3f{}) {
@@ -413,19 +540,26 @@ TrackStats IsoSurfaceTracker::track(const FieldFunction& field, const std::vecto
       stats.solver_iterations += detail::solve_tangential_cg(tp, unknowns, local, d);
       for (std::size_t a = 0; a < unknowns.size(); ++a) disp[std::size_t(unknowns[a])] = d[a];
       stats.vertex_updates += static_cast<long>(active.size());
-      stats.max_move = run(true);
+      stats.max_move = run(true, force);
       for (int i : unknowns) disp[std::size_t(i)] = Vec3f{};
       stats.iterations = k + 1;
+      const bool verified = std::exchange(force, false);
       if (stats.max_move <= tol) {
-        stats.converged = true;
-        break;
+        if (settle(verified)) {
+          stats.converged = true;
+          break;
+        }
+        force = true;
       }
     }
   }
   for (int k = 0; k < (cg ? 0 : options_.max_iterations); ++k) {
     if (active.empty()) {
-      stats.converged = true;
-      break;
+      if (settle(force)) {
+        stats.converged = true;
+        break;
+      }
+      force = true;
     }
     // Chebyshev weights (Wang 2015, "A Chebyshev semi-iterative approach for accelerating
     // projective and position-based dynamics"): ω = 2 / (2 - ρ²) at the first accelerated
@@ -433,14 +567,24 @@ TrackStats IsoSurfaceTracker::track(const FieldFunction& field, const std::vecto
     if (rho2 > 0.f && k >= kChebyshevDelay)
       omega = k == kChebyshevDelay ? 2.f / (2.f - rho2) : 4.f / (4.f - rho2 * omega);
     stats.vertex_updates += static_cast<long>(active.size());
-    stats.max_move = run(true);
+    stats.max_move = run(true, force);
     stats.iterations = k + 1;
+    const bool verified = std::exchange(force, false);
     if (stats.max_move <= tol) {
-      stats.converged = true;
-      break;
+      if (settle(verified)) {
+        stats.converged = true;
+        break;
+      }
+      force = true;
     }
   }
   if (options_.max_iterations == 0) stats.converged = true;
+  if (!stats.converged && lazy_on && !settle(false)) {
+    // Stopped by the iteration cap: the vertices last moved on a linearised field take one
+    // evaluated Newton step (no tangential step), so that none ends on a linearisation.
+    run(false, true);
+  }
+  stats.field_evaluations = evaluations;
   if (first) std::fill(touched.begin(), touched.end(), std::uint8_t{1});  // nothing evaluated yet
   // Contacts reported by the field at the last evaluation also get smoothed.
   for (std::size_t i = 0; i < n; ++i)
@@ -491,7 +635,14 @@ TrackStats IsoSurfaceTracker::track(const FieldFunction& field, const std::vecto
                               flags_, stats, inverted);
   last_inverted_ = inverted;
   for (std::size_t i = 0; i < n; ++i)
-    if (!detail::finite(cur[i])) cur[i] = detail::row(positions, static_cast<Eigen::Index>(i));
+    if (!detail::finite(cur[i])) cur[i] = detail::row(positions, static_cast<Eigen::Index>(user(i)));
+  if (!order_.empty()) {
+    // Back to the caller's order: positions and flags.
+    cur = permuted(cur, rank_);
+    flags_.contact = permuted(flags_.contact, rank_);
+    flags_.lost = permuted(flags_.lost, rank_);
+    flags_.beta = permuted(flags_.beta, rank_);
+  }
   detail::from_points(cur, positions);
   stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return stats;

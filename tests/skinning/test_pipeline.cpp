@@ -155,6 +155,9 @@ TEST_CASE("pipeline: bad input to the skinner is rejected naming the item", "[sk
   CHECK(s.tracker.relaxation == isokit::track::Relaxation::kJacobi);
   CHECK(setup_from_json(R"({"tracker": {"relaxation": "cg"}})", "s.json").tracker.relaxation ==
         isokit::track::Relaxation::kConjugateGradient);
+  CHECK(s.tracker.lazy_evaluation);
+  CHECK_FALSE(
+      setup_from_json(R"({"tracker": {"lazy_evaluation": false}})", "s.json").tracker.lazy_evaluation);
   CHECK_THROWS_WITH(setup_from_json(R"({"tracker": {"relaxation": "gauss"}})", "s.json"),
                     Catch::Contains("s.json.tracker.relaxation") && Catch::Contains("cg"));
 }

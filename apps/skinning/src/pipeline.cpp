@@ -227,6 +227,7 @@ BakeResult Skinner::bake(Method method, const std::vector<Pose>& poses, const Ba
         const track::TrackStats ts = projector->project(field->function(), pos);
         st.iterations = ts.iterations;
         st.vertex_updates = double(nv) * ts.iterations;
+        st.field_evaluations = st.vertex_updates;
         st.lost_vertices = ts.lost_vertices;
         contact = &projector->flags().contact;
         break;
@@ -254,6 +255,7 @@ BakeResult Skinner::bake(Method method, const std::vector<Pose>& poses, const Ba
           const track::TrackStats ts = tracker->track(field->function(), rotations, current);
           st.iterations += ts.iterations;
           st.vertex_updates += double(ts.vertex_updates);
+          st.field_evaluations += double(ts.field_evaluations);
           st.lost_vertices = ts.lost_vertices;
           prev_skin = sk;
         }

@@ -152,7 +152,7 @@ SkinSetup setup_from_json(const std::string& text, const std::string& source) {
     const std::string w = source + ".tracker";
     check_keys(t,
                {"max_iterations", "tolerance", "sigma", "contact_angle_deg", "initial_newton_steps",
-                "smoothing_steps", "beta_diffusion_steps", "angle_contacts", "relaxation"},
+                "smoothing_steps", "beta_diffusion_steps", "angle_contacts", "relaxation", "lazy_evaluation"},
                w);
     std::string relaxation = "jacobi";
     read(t, "relaxation", relaxation, w);
@@ -169,6 +169,7 @@ SkinSetup setup_from_json(const std::string& text, const std::string& source) {
     read(t, "smoothing_steps", s.tracker.smoothing.smoothing_steps, w);
     read(t, "beta_diffusion_steps", s.tracker.smoothing.beta_diffusion_steps, w);
     read(t, "angle_contacts", s.tracker.angle_contacts, w);
+    read(t, "lazy_evaluation", s.tracker.lazy_evaluation, w);
   }
   if (j.contains("projector")) {
     const json& p = j.at("projector");

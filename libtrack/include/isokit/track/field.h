@@ -36,6 +36,9 @@ struct TrackStats {
   /// Vertex updates of the relaxation (2014 tracker: the sum of the active-set sizes over its
   /// iterations, at most `iterations * #V`; 2013 projector: 0).
   long vertex_updates{0};
+  /// Field evaluations of the Newton and relaxation iterations (2014 tracker; fewer than the
+  /// vertex updates with lazy evaluation; the final statistics' evaluations are not counted).
+  long field_evaluations{0};
   long solver_iterations{0};  ///< CG iterations summed over the relaxation (Relaxation::kConjugateGradient)
   bool converged{false};      ///< largest move fell under the tolerance before the iteration cap
   float max_move{0};          ///< largest vertex move in the last iteration

@@ -81,6 +81,21 @@ struct TrackerOptions {
   /// The CG system covers the vertices that moved by more than the tolerance grown by this many
   /// rings (≥ 1; kConjugateGradient).
   int cg_rings{2};
+  /// Lazy field evaluation (not in the papers): a vertex whose last evaluated Newton step was
+  /// short, on a smooth part of the field (no contact, gradient turned by < 10°), takes its next
+  /// Newton steps on the field linearised at that evaluation, without evaluating it, while it stays
+  /// within a trust radius of it. The radius starts at twice the tolerance and follows the error
+  /// the linearisation made the last time (half the tolerance per move), at most
+  /// sqrt(2 · tolerance · ℓ) (ℓ: the mean rest edge length; the curvature bound of a surface the
+  /// mesh resolves). Before a call counts as converged every vertex so moved is evaluated again;
+  /// at the iteration cap they take one evaluated Newton step. false = one field evaluation per
+  /// active vertex and iteration (2014). See docs/tracking.md.
+  bool lazy_evaluation{true};
+  /// Work on the vertices in a spatial (Morton) order internally, so that the neighbours a Jacobi
+  /// step reads share cache lines (inputs and outputs stay in the caller's order; results equal
+  /// the unordered run up to floating-point rounding: neighbour sums run in another order).
+  /// 1.4x faster on the procedural humanoid, whose mesher emits vertices in random order.
+  bool reorder_vertices{true};
 };
 
 /// Stateful tracker: precomputes weights and adjacency, then tracks many times.
@@ -108,22 +123,27 @@ class IsoSurfaceTracker {
   /// \throw InputError for wrong sizes or non-finite positions / rotations.
   TrackStats track(const FieldFunction& field, const std::vector<Mat3f>& rotations, Positions& positions);
 
+  /// Per-vertex flags of the last call, in the caller's vertex order.
   const VertexFlags& flags() const { return flags_; }
-  const Adjacency& adjacency() const { return adj_; }
-  /// Cotangent weights aligned with `adjacency().neighbors` (symmetric, ≥ 0).
-  const std::vector<float>& weights() const { return weights_; }
+  /// One-ring adjacency in the caller's vertex order (built on each call).
+  Adjacency adjacency() const;
+  /// Cotangent weights aligned with `adjacency().neighbors` (symmetric, ≥ 0; built on each call).
+  std::vector<float> weights() const;
   const TrackerOptions& options() const { return options_; }
 
  private:
-  Positions rest_;
+  // Everything per vertex below is in the internal order: internal vertex k is the caller's
+  // vertex order_[k] (empty: the same order), rank_ the inverse.
+  std::vector<int> order_, rank_;
   Triangles triangles_;
   std::vector<Vec3f> rest_pts_;
   std::vector<float> iso_;
   TrackerOptions options_;
   Adjacency adj_;
   std::vector<float> weights_, weight_sum_, max_step_, mask_;
+  std::vector<float> lazy_r2_;  // squared lazy evaluation radius per vertex
   float diagonal_{0};
-  VertexFlags flags_;
+  VertexFlags flags_;                        // caller's order
   Adjacency vertex_faces_;                   // CSR: the triangles around each vertex
   std::vector<std::uint8_t> rest_inverted_;  // per triangle (empty: none recorded)
   std::vector<std::uint8_t> last_inverted_;  // per triangle, at the end of the last call

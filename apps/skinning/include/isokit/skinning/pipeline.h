@@ -43,6 +43,9 @@ struct FrameStats {
   /// Vertex updates: tracker active-set sizes summed over iterations and sub-steps
   /// (tracking2014), or vertices × projector steps (implicit2013).
   double vertex_updates{0};
+  /// Field evaluations of the tracker (tracking2014, summed over sub-steps; fewer than the vertex
+  /// updates with lazy evaluation), or vertices × projector steps (implicit2013).
+  double field_evaluations{0};
   int lost_vertices{0};  ///< vertices without a usable gradient (left in place by the tracker)
   FrameMetrics metrics;  ///< all quality metrics (field ones with the 2014 tree)
 };
