@@ -244,7 +244,7 @@ TrackStats IsoSurfaceTracker::track(const FieldFunction& field, const std::vecto
   auto user = [&](std::size_t i) { return order_.empty() ? i : std::size_t(order_[i]); };
   // Three position buffers: x_{k-1} (`prev`, for the Chebyshev step), x_k (`cur`), x_{k+1}.
   // Only the active vertices are written; for the others next = cur = prev.
-  std::vector<Vec3f> prev = cur, next = cur, grads(n), normal(n, Vec3f{});
+  std::vector<Vec3f> prev = cur, next = cur, normal(n, Vec3f{});
   std::vector<float> values(n), moves(n, 0.f), damping(n, 1.f);  // moves: squared lengths
   const bool cg = options_.relaxation == Relaxation::kConjugateGradient;
   // CG relaxation: a vertex whose Newton steps overshoot (the residual changes sign without
