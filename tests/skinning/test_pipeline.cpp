@@ -102,24 +102,26 @@ TEST_CASE("pipeline: tracking2014 on the capsule beats LBS and DQS at 150 degree
   // Non-contact vertices on their iso-values; contact in the fold; back at rest at the end.
   CHECK(trk.worst.iso_residual_max < 1e-3);
   CHECK(trk.stats[15].metrics.contact_vertices > 0);
-  CHECK(trk.rest_recovery <= 2e-3);
+  // Issue 6's target: no intersections, back at rest within 1e-3 of the diagonal (the
+  // inverted-triangle half is the [!mayfail] case below).
+  CHECK(trk.worst.self_intersections == 0);
+  CHECK(trk.rest_recovery <= 1e-3);
   for (const FrameStats& s : trk.stats) CHECK(s.lost_vertices == 0);
   // The rest pose is reproduced at frame 0 by every method.
   CHECK(lbs.stats[0].metrics.max_displacement < 1e-6);
   CHECK(trk.stats[0].metrics.max_displacement < 1e-6);
 }
 
-// The issue's target (0 inverted triangles, 0 self-intersections, rest recovery 1e-3 with the
-// paper's defaults). Not met yet: see docs/skinning.md "Known limits". Runs, reports, never fails
-// the suite ([!mayfail]) so the gap stays visible in every test log.
-TEST_CASE("pipeline: tracking2014 target: capsule at 150 degrees without inversions or intersections",
+// The issue's inverted-triangle target (0 with the paper's defaults). Not met yet (2 at the fold's
+// apex): see docs/skinning.md "Known limits". Runs, reports, never fails the suite ([!mayfail])
+// so the gap stays visible in every test log.
+TEST_CASE("pipeline: tracking2014 target: capsule at 150 degrees without inverted triangles",
           "[skinning][pipeline][slow][!mayfail]") {
   Skinner sk(testing::capsule_rig(), fast_setup());
   const auto poses = bend_animation(sk.rig(), {parse_bend("Bone1:z:150", sk.rig())}, 31);
   const BakeResult trk = sk.bake(Method::kTracking2014, poses);
+  INFO("inverted " << trk.worst.inverted_triangles);
   CHECK(trk.worst.inverted_triangles == 0);
-  CHECK(trk.worst.self_intersections == 0);
-  CHECK(trk.rest_recovery <= 1e-3);
 }
 
 TEST_CASE("pipeline: serial and parallel bakes are identical", "[skinning][pipeline][slow]") {
