@@ -82,6 +82,8 @@ FittedPart fit_part(const MeshPart& part, const PartFitOptions& o) {
           "use the default 30");
   require(o.cull_h >= 0 && o.cull_h < 0.5, name + ": cull_h",
           "must be in [0, 0.5) (got " + format_number(o.cull_h) + ")", "use the default 0.05");
+  require(o.opening_offset >= 0 && o.opening_offset <= 2, name + ": opening_offset",
+          "must be in [0, 2] (got " + format_number(o.opening_offset) + ")", "use 0.1 (the default)");
   require(o.support_margin > 0 && std::isfinite(o.support_margin), name + ": support_margin", "must be > 0",
           "use the default 1");
   require(finite(part.bone_start) && finite(part.bone_end), name + ": bone", "has non-finite end points",
@@ -194,6 +196,18 @@ FittedPart fit_part(const MeshPart& part, const PartFitOptions& o) {
     require(s > 1e-6 * len, name + ": closure at bone_end", "a vertex lies on the joint",
             "move the joint inside the limb or disable PartFitOptions::close_end");
     out.samples.push_back({{0, 0, len + s}, {0, 0, 1}});
+    ++out.closure_points;
+  }
+  for (std::size_t k = 0; k < part.openings.size(); ++k) {
+    const Vec3d j = frame.apply_inverse(part.openings[k].joint);
+    const Vec3d d = frame.rotate_inverse(part.openings[k].direction);
+    const std::string item = name + ": opening " + std::to_string(k);
+    require(finite(j) && finite(d) && norm(d) > 0.5 && norm(d) < 2, item,
+            "needs a finite joint and a unit direction",
+            "pass the child joint and the direction out of the part");
+    const double s = nearest(j);
+    require(s > 1e-6 * len, item, "a vertex lies on the joint", "move the joint inside the part");
+    out.samples.push_back({j + d * (o.opening_offset * s / norm(d)), d / norm(d)});
     ++out.closure_points;
   }
   auto hrbf = std::make_shared<const Hrbf>(out.samples, o.hrbf, name);

@@ -162,6 +162,48 @@ TEST_CASE("a fitted limb part closes smoothly at its joint", "[fit]") {
   CHECK(worst_open > 2 * worst_closed);  // the closure point is what removes the bump
 }
 
+TEST_CASE("openings close a part's holes at their joints (branching parts)", "[fit]") {
+  // An open tube along an arbitrary axis, closed by openings instead of the bone-end closures
+  // (what a hips or chest part gets at each child joint): the cap's 0.5 level crosses the axis
+  // `opening_offset × s` beyond each joint (s = R here), and the field vanishes beyond it.
+  const double R = 0.3, L = 1.5;
+  Vec3d axis{0.3, -0.4, 0.87};
+  axis = axis / norm(axis);
+  const Vec3d a{0.2, -0.1, 0.3}, b = a + axis * L;
+  std::vector<std::pair<double, double>> prof;
+  for (int i = 0; i <= 15; ++i) prof.push_back({L * i / 15, R});
+  MeshPart part = revolve(prof, a, b, 24, false, false, {}, {});
+  part.name = "pelvis";
+  part.openings = {{a, axis * -1.0}, {b, axis}};
+  for (double k : {0.1, 0.5, 1.0}) {
+    PartFitOptions o;
+    o.close_start = o.close_end = false;
+    o.opening_offset = k;
+    const FittedPart fp = fit_part(part, o);
+    INFO("opening_offset " << k);
+    REQUIRE(fp.closure_points == 2);
+    const Vec3d c0 = fp.local_to_world.apply(fp.samples[fp.samples.size() - 2].position);
+    const Vec3d c1 = fp.local_to_world.apply(fp.samples.back().position);
+    CHECK(norm(c0 - (a - axis * (k * R))) < 1e-9);
+    CHECK(norm(c1 - (b + axis * (k * R))) < 1e-9);
+    // The 0.5 level along the axis, from the tube's middle outwards: at the closure points.
+    const Vec3d mid = a + axis * (0.5 * L);
+    CHECK(iso_along(fp, mid, axis * -1.0, 0.5 * L + 2 * R) == Approx(0.5 * L + k * R).margin(0.02 * R));
+    CHECK(iso_along(fp, mid, axis, 0.5 * L + 2 * R) == Approx(0.5 * L + k * R).margin(0.02 * R));
+    // Beyond the support the field is exactly 0; inside, on the axis, above 0.5.
+    CHECK(fp.local->eval_d(fp.local_to_world.apply_inverse(b + axis * (3 * R))).value < 0.5);
+    CHECK(fp.local->eval_d(fp.local_to_world.apply_inverse(mid)).value > 0.9);
+  }
+  PartFitOptions o;
+  o.close_start = o.close_end = false;
+  MeshPart bad = part;
+  bad.openings[1].direction = {0, 0, 0};
+  CHECK_THROWS_WITH(fit_part(bad, o),
+                    Catch::Contains("pelvis: opening 1") && Catch::Contains("unit direction"));
+  o.opening_offset = -0.5;
+  CHECK_THROWS_WITH(fit_part(part, o), Catch::Contains("pelvis: opening_offset"));
+}
+
 TEST_CASE("fitted primitive and its grid: gradients against central differences", "[fit]") {
   const MeshPart part = sphere_part(1.0, {0, 0, 0}, {0, 0, 1});
   const FittedPart fp = fit_part(part);

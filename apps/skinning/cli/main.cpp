@@ -218,7 +218,7 @@ int main(int argc, char** argv) {
                  static_cast<long long>(rig.rest.rows()), rig.joints.size());
     Skinner skinner(rig, setup, progress);
     for (const BonePart& b : skinner.fitted().bones())
-      if (!b.fitted && b.vertices > 0)
+      if (!b.fitted && !b.error.empty() && b.error != "no vertices")
         std::fprintf(stderr, "  warning: joint '%s' has no primitive: %s\n", rig.joints[b.joint].name.c_str(),
                      b.error.c_str());
     std::fprintf(stderr, "isokit-skin: %d primitives fitted in %.2f s (setup %.2f s)\n",

@@ -249,6 +249,32 @@ FittedRig::FittedRig(const Rig& rig, const SkinSetup& setup, const Progress& pro
         if (!o.close_start) seg0 = start + dir * (lo - margin);
         seg1 = start + dir * (hi + margin);
         o.close_end = false;
+        // A branching part (hips, chest) has a hole at each child limb: close each like a bone
+        // end, along the child's direction (2013 §4.1 closes every joint of a part).
+        std::vector<int> openings, stack(children[j].rbegin(), children[j].rend());
+        while (!stack.empty()) {  // the nearest descendants with vertices (through merged joints)
+          const int c = stack.back();
+          stack.pop_back();
+          if (count[c] > 0)
+            openings.push_back(c);
+          else
+            stack.insert(stack.end(), children[c].rbegin(), children[c].rend());
+        }
+        for (int c : openings) {
+          Eigen::Vector3d cdir;
+          if (children[c].size() == 1 && (jp[children[c][0]] - jp[c]).norm() > 1e-3 * extent) {
+            cdir = jp[children[c][0]] - jp[c];
+          } else {
+            Eigen::Vector3d cc = Eigen::Vector3d::Zero();
+            int m = 0;
+            for (int v = 0; v < nv; ++v)
+              if (partition_[v] == c) cc += Eigen::Vector3d(r.rest(v, 0), r.rest(v, 1), r.rest(v, 2)), ++m;
+            cdir = cc / std::max(m, 1) - jp[c];
+          }
+          if (!(cdir.norm() > 1e-6 * extent)) continue;
+          cdir.normalize();
+          part.openings.push_back({{jp[c].x(), jp[c].y(), jp[c].z()}, {cdir.x(), cdir.y(), cdir.z()}});
+        }
       }
       part.bone_start = {seg0.x(), seg0.y(), seg0.z()};
       part.bone_end = {seg1.x(), seg1.y(), seg1.z()};
@@ -279,6 +305,7 @@ FittedRig::FittedRig(const Rig& rig, const SkinSetup& setup, const Progress& pro
           if (facing(t) > thresholds[attempt]) part.triangles.push_back(t);
         implicit::PartFitOptions oa = o;
         if (attempt == 2) oa.close_start = oa.close_end = false;
+        if (attempt == 2) part.openings.clear();
         try {
           b.fit = implicit::fit_part(part, oa);
           b.fitted = true;

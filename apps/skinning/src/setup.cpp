@@ -125,12 +125,15 @@ SkinSetup setup_from_json(const std::string& text, const std::string& source) {
   if (j.contains("fit")) {
     const json& f = j.at("fit");
     const std::string w = source + ".fit";
-    check_keys(f, {"samples", "cull_h", "grid_resolution", "seed", "grid"}, w);
+    check_keys(f, {"samples", "cull_h", "grid_resolution", "seed", "grid", "opening_offset"}, w);
     read(f, "samples", s.fit.target_samples, w);
     read(f, "cull_h", s.fit.cull_h, w);
     read(f, "grid_resolution", s.fit.grid_resolution, w);
     read(f, "seed", s.fit.seed, w);
     read(f, "grid", s.fit.sample_grid, w);
+    read(f, "opening_offset", s.fit.opening_offset, w);
+    require(s.fit.opening_offset >= 0 && s.fit.opening_offset <= 2, w + ".opening_offset",
+            "must be in [0, 2] (got " + format_number(s.fit.opening_offset) + ")", "use 0.1 (the default)");
     require(s.fit.target_samples >= 4 && s.fit.target_samples <= 2000, w + ".samples", "must be in [4, 2000]",
             "the paper uses 50");
     require(s.fit.grid_resolution >= 4 && s.fit.grid_resolution <= 256, w + ".grid_resolution",

@@ -33,6 +33,15 @@ struct MeshPart {
   std::vector<std::array<int, 3>> triangles;
   Vec3d bone_start{};  ///< joint with the parent (b⁰)
   Vec3d bone_end{};    ///< joint with the child (b¹)
+  /// More openings to close (world coordinates), e.g. the child joints of a branching part
+  /// (hips, chest): each gets a closure point `PartFitOptions::opening_offset × s` beyond
+  /// `joint` along `direction` (unit, pointing out of the part), `s` = joint to nearest vertex,
+  /// normal `direction`.
+  struct Opening {
+    Vec3d joint{};
+    Vec3d direction{};
+  };
+  std::vector<Opening> openings;
 };
 
 struct PartFitOptions {
@@ -42,8 +51,12 @@ struct PartFitOptions {
   double cull_h = 0.05;            ///< culling planes at this fraction of the bone length (2013 eq. 2)
   bool close_start = true;         ///< closure point beyond bone_start
   bool close_end = true;           ///< closure point beyond bone_end
-  double support_margin = 1.0;     ///< support box = sample box grown by margin × r (checked)
-  bool sample_grid = true;         ///< also build the grid (2013 §6)
+  /// Closure points of `MeshPart::openings` lie this fraction of `s` beyond their joint (not in
+  /// the papers, which close bone ends at `s`: a branching part's cap at `s` reaches into its
+  /// children and makes contact with them at rest; docs/skinning.md, "fitting").
+  double opening_offset = 0.1;
+  double support_margin = 1.0;  ///< support box = sample box grown by margin × r (checked)
+  bool sample_grid = true;      ///< also build the grid (2013 §6)
   int grid_resolution = 32;
   HrbfOptions hrbf{};
 };

@@ -6,16 +6,21 @@
 ///
 /// ```json
 /// { "version": 1,
-///   "tree": "auto",                      // "auto" (method's paper), "2013" or "2014"
-///   "default_operator": "auto",          // "auto" (2014: contact, 2013: blend) | union | blend | bulge |
-///   contact "joints": { "LeftForeArm": { "operator": "bulge", "relaxation": 0.5 } }, "fit": { "samples": 50,
-///   "cull_h": 0.05, "grid_resolution": 32, "seed": 1 }, "operators": { "resolution": 128, "slices": 128 },
+///   "tree": "auto",
+///   "default_operator": "auto",
+///   "joints": { "LeftForeArm": { "operator": "bulge", "relaxation": 0.5 } },
+///   "fit": { "samples": 50, "cull_h": 0.05, "grid_resolution": 32, "seed": 1,
+///            "opening_offset": 0.1 },
+///   "operators": { "resolution": 128, "slices": 128 },
 ///   "tracker": { "max_iterations": 100, "tolerance": 1e-5, "sigma": 1.0, "contact_angle_deg": 55,
-///                "initial_newton_steps": 10, "smoothing_steps": 3, "beta_diffusion_steps": 2,
-///                "relaxation": "jacobi" },  // or "cg" (track::Relaxation)
+///                "initial_newton_steps": 10, "smoothing_steps": 5, "beta_diffusion_steps": 3,
+///                "relaxation": "jacobi" },
 ///   "projector": { "sigma": 0.35, "max_iterations": 50, "contact_angle_deg": 55 },
 ///   "substeps": { "paper_rule": true, "min_step_rad": 0.05, "max_step_rad": 0 } }
 /// ```
+/// `tree`: "auto" (the method's paper), "2013" or "2014". `default_operator`: "auto" (2014:
+/// contact, 2013: blend), "union", "blend", "bulge" or "contact". `tracker.relaxation`: "jacobi"
+/// or "cg" (track::Relaxation).
 #pragma once
 
 #include <map>
