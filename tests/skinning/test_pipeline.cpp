@@ -162,4 +162,8 @@ TEST_CASE("pipeline: bad input to the skinner is rejected naming the item", "[sk
       setup_from_json(R"({"tracker": {"lazy_evaluation": false}})", "s.json").tracker.lazy_evaluation);
   CHECK_THROWS_WITH(setup_from_json(R"({"tracker": {"relaxation": "gauss"}})", "s.json"),
                     Catch::Contains("s.json.tracker.relaxation") && Catch::Contains("cg"));
+  CHECK(s.fit.opening_offset == 0.1);
+  CHECK(setup_from_json(R"({"fit": {"opening_offset": 1}})", "s.json").fit.opening_offset == 1.0);
+  CHECK_THROWS_WITH(setup_from_json(R"({"fit": {"opening_offset": -0.5}})", "s.json"),
+                    Catch::Contains("s.json.fit.opening_offset") && Catch::Contains("[0, 2]"));
 }
