@@ -88,35 +88,16 @@ BENCHMARK(BM_SkinFrame)->Apply(args)->UseManualTime()->Unit(benchmark::kMillisec
 // radians per animation step): spine, neck, head, shoulders, elbows, wrists, fingers, hips,
 // knees and ankles bend together from rest to a full-body pose and back, with every joint
 // turning by at most `step` between two frames (frames = 2 ceil(90° / step) + 1), sub-stepped
-// by the library's default rule (2014 §5.2). Manual time = mean deformation time per frame.
-std::vector<BendSpec> full_body_bends(const Rig& rig) {
-  // A crouch with the arms raised in front (no two limbs touch: dqs shows no self-intersection).
-  std::vector<std::string> specs = {
-      "Spine:x:10",     "Spine1:x:10",     "Spine2:x:10",      "Neck:x:15",         "Head:x:10",
-      "LeftArm:x:30",   "RightArm:x:30",   "LeftForeArm:x:90", "RightForeArm:x:90", "LeftHand:x:30",
-      "RightHand:x:30", "LeftUpLeg:x:-45", "RightUpLeg:x:-30", "LeftLeg:x:90",      "RightLeg:x:60",
-      "LeftFoot:x:20",  "RightFoot:x:20"};
-  for (const char* side : {"Left", "Right"})
-    for (const char* finger : {"Thumb", "Index", "Middle", "Pinky"})
-      for (int k = 1; k <= 3; ++k)
-        specs.push_back(std::string(side) + "Hand" + finger + std::to_string(k) + ":x:45");
-  std::vector<BendSpec> out;
-  for (const std::string& s : specs) {
-    const std::string joint = s.substr(0, s.find(':'));
-    for (const Joint& j : rig.joints)
-      if (j.name == joint) out.push_back(parse_bend(s, rig));
-  }
-  return out;
-}
-
+// by the library's default rule (2014 §5.2): `crouch_bends`. Manual time = mean deformation
+// time per frame.
 void BM_SkinStep(benchmark::State& state) {
   const Method method = all_methods()[static_cast<std::size_t>(state.range(0))];
   const int vertices = static_cast<int>(state.range(1));
   const double step = double(state.range(2)) / 1000.0;
   Skinner& sk = skinner(vertices, 0.0);                    // library defaults: the paper's sub-step rule only
-  const double max_rad = 90.0 * 3.14159265358979 / 180.0;  // the largest bend above
+  const double max_rad = 90.0 * 3.14159265358979 / 180.0;  // the largest bend of crouch_bends
   const int frames = 2 * static_cast<int>(std::ceil(max_rad / step - 1e-9)) + 1;
-  const std::vector<BendSpec> bends = full_body_bends(sk.rig());
+  const std::vector<BendSpec> bends = crouch_bends(sk.rig());
   const std::vector<Pose> poses = bend_animation(sk.rig(), bends, frames);
   bake_and_count(state, sk, method, poses);
   state.counters["bent_joints"] = double(bends.size());

@@ -66,6 +66,25 @@ BendSpec parse_bend(const std::string& text, const Rig& rig) {
   return b;
 }
 
+std::vector<BendSpec> crouch_bends(const Rig& rig) {
+  std::vector<std::string> specs = {
+      "Spine:x:10",     "Spine1:x:10",     "Spine2:x:10",      "Neck:x:15",         "Head:x:10",
+      "LeftArm:x:30",   "RightArm:x:30",   "LeftForeArm:x:90", "RightForeArm:x:90", "LeftHand:x:30",
+      "RightHand:x:30", "LeftUpLeg:x:-45", "RightUpLeg:x:-30", "LeftLeg:x:90",      "RightLeg:x:60",
+      "LeftFoot:x:20",  "RightFoot:x:20"};
+  for (const char* side : {"Left", "Right"})
+    for (const char* finger : {"Thumb", "Index", "Middle", "Pinky"})
+      for (int k = 1; k <= 3; ++k)
+        specs.push_back(std::string(side) + "Hand" + finger + std::to_string(k) + ":x:45");
+  std::vector<BendSpec> out;
+  for (const std::string& s : specs) {
+    const std::string joint = s.substr(0, s.find(':'));
+    for (const Joint& j : rig.joints)
+      if (j.name == joint) out.push_back(parse_bend(s, rig));
+  }
+  return out;
+}
+
 std::vector<Pose> bend_animation(const Rig& rig, const std::vector<BendSpec>& bends, int frames) {
   require(frames >= 3, "--frames", "need at least 3 frames (got " + std::to_string(frames) + ")",
           "rest, peak and rest again");

@@ -26,6 +26,12 @@ struct BendSpec {
 /// \throw InputError naming the option, the joint names when the joint is unknown.
 BendSpec parse_bend(const std::string& text, const Rig& rig);
 
+/// The full-body crouch isokit measures the 2014 Table 1 protocol with ("all joints animated
+/// simultaneously"): spine, neck, head, arms, forearms, hands, fingers, thighs, knees and feet of
+/// the procedural humanoid bent together, arms raised in front, at most 90° per joint; the joints
+/// the rig lacks (no fingers) are skipped. docs/performance.md.
+std::vector<BendSpec> crouch_bends(const Rig& rig);
+
 /// `frames` poses bending every spec from rest to its angle and back to rest (frame 0 and the
 /// last frame are the rest pose; the peak is frame `frames / 2`). \throw InputError if frames < 3.
 std::vector<Pose> bend_animation(const Rig& rig, const std::vector<BendSpec>& bends, int frames);
