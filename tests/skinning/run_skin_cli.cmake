@@ -15,6 +15,12 @@ if(NOT LAST_OUT MATCHES "Finger3")
   message(FATAL_ERROR "info does not list the joints:\n${LAST_OUT}")
 endif()
 
+# info --fit reports every joint's primitive.
+run(info "procedural:finger?vertices=1500" --fit)
+if(NOT LAST_OUT MATCHES "primitives: 4 of 4" OR NOT LAST_OUT MATCHES "related / unrelated")
+  message(FATAL_ERROR "info --fit does not report the primitives:\n${LAST_OUT}")
+endif()
+
 # bake with every output on the cylinder.
 run(bake procedural:cylinder --method tracking2014 --bend Bone1:x:120 --frames 9 --compare
     --out "${OUT}/cyl/out.glb" --metrics "${OUT}/cyl/metrics.json" --render "${OUT}/cyl/render"

@@ -124,6 +124,22 @@ TEST_CASE("pipeline: tracking2014 target: capsule at 150 degrees without inverte
   CHECK(trk.worst.inverted_triangles == 0);
 }
 
+TEST_CASE("pipeline: the fit report counts where each primitive reaches at rest", "[skinning][pipeline]") {
+  Skinner sk(testing::capsule_rig(), fast_setup());
+  const std::vector<PrimitiveCoverage> cov = primitive_coverage(sk.fitted());
+  REQUIRE(cov.size() == 2);
+  int own = 0;
+  for (const PrimitiveCoverage& c : cov) {
+    INFO("joint " << c.joint << ": own " << c.own << ", related " << c.related << ", unrelated "
+                  << c.unrelated);
+    own += c.own;
+    CHECK(c.unrelated == 0);  // two bones: every other vertex is the neighbour's
+    CHECK(c.related == 0);    // a clean limb: the closure caps stay inside the neighbour's skin
+    CHECK(sk.fitted().bones()[static_cast<std::size_t>(c.joint)].merged_into == -1);
+  }
+  CHECK(own == static_cast<int>(sk.rig().rest.rows()));
+}
+
 TEST_CASE("pipeline: serial and parallel bakes are identical", "[skinning][pipeline][slow]") {
   Skinner sk(testing::capsule_rig(), fast_setup());
   const auto poses = bend_animation(sk.rig(), {parse_bend("Bone1:z:90", sk.rig())}, 5);

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 // isokit-skin: implicit skinning of rigged characters from the command line.
-//   isokit-skin info RIG
+//   isokit-skin info RIG [--fit [--setup S.json]]
 //   isokit-skin bake RIG --method M [--clip NAME | --bend J:AXIS:DEG ... | --pose-script P.json]
 //                    [--frames N] [--fps N] [--max-step-rad R] [--setup S.json] --out OUT.glb
 //                    [--metrics M.json] [--render DIR] [--ply DIR]
@@ -61,6 +61,31 @@ void print_info(const Rig& rig, const std::string& spec) {
     std::printf("  %-24s %zu frames at %.1f fps\n", c.name.c_str(), c.local.size(), c.fps);
 }
 
+// `info --fit`: what the fit made of every joint.
+void print_fit(const FittedRig& fitted) {
+  const Rig& rig = fitted.rig();
+  std::vector<PrimitiveCoverage> coverage(rig.joints.size());
+  for (const PrimitiveCoverage& c : primitive_coverage(fitted))
+    coverage[static_cast<std::size_t>(c.joint)] = c;
+  std::printf("primitives: %d of %zu joints (fit %.2f s)\n", fitted.fitted_count(), rig.joints.size(),
+              fitted.fit_seconds());
+  std::printf("  %-24s %8s %7s %8s  %s\n", "joint", "vertices", "r", "closures",
+              "inside at rest: related / unrelated");
+  for (const BonePart& b : fitted.bones()) {
+    const char* name = rig.joints[static_cast<std::size_t>(b.joint)].name.c_str();
+    if (b.fitted) {
+      const PrimitiveCoverage& c = coverage[static_cast<std::size_t>(b.joint)];
+      std::printf("  %-24s %8d %7.3g %8d  %d / %d\n", name, b.vertices, b.fit.r, b.fit.closure_points,
+                  c.related, c.unrelated);
+    } else {
+      std::printf("  %-24s no primitive: %s\n", name, b.error.c_str());
+    }
+  }
+  std::printf(
+      "  (related: vertices of the primitives next to it in the tree; unrelated: of any other\n"
+      "   joint; many unrelated vertices mean a primitive reaching where it should not)\n");
+}
+
 int threads() {
   return static_cast<int>(std::thread::hardware_concurrency());
 }
@@ -116,6 +141,12 @@ int main(int argc, char** argv) {
   info->add_option("RIG", rig_spec,
                    "glTF/FBX/COLLADA file, or procedural:cylinder|finger|humanoid?vertices=N")
       ->required();
+  bool info_fit = false;
+  std::string info_setup;
+  info->add_flag("--fit", info_fit,
+                 "also fit the primitives and report each joint's (vertices, r, closure points, and how "
+                 "many rest vertices of other joints lie inside it)");
+  info->add_option("--setup", info_setup, "JSON setup file for --fit");
 
   auto* bake =
       app.add_subcommand("bake", "Deform a rig over an animation with one method and write the result");
@@ -166,7 +197,13 @@ int main(int argc, char** argv) {
   try {
     const Progress progress = stderr_progress();
     if (*info) {
-      print_info(open_rig(rig_spec, fps, progress), rig_spec);
+      Rig rig = open_rig(rig_spec, fps, progress);
+      print_info(rig, rig_spec);
+      if (info_fit) {
+        const Skinner skinner(std::move(rig), info_setup.empty() ? SkinSetup{} : load_setup(info_setup),
+                              progress);
+        print_fit(skinner.fitted());
+      }
       return 0;
     }
     SkinSetup setup = setup_path.empty() ? SkinSetup{} : load_setup(setup_path);

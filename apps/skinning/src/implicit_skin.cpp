@@ -150,6 +150,7 @@ FittedRig::FittedRig(const Rig& rig, const SkinSetup& setup, const Progress& pro
       for (int j = 0; j < nj; ++j)
         if (target[j] >= 0) {
           bones_[j].vertices = 0;
+          bones_[j].merged_into = target[j];
           bones_[j].error += " (its vertices were merged into '" + r.joints[target[j]].name + "')";
         }
     }
@@ -325,6 +326,39 @@ FittedRig::FittedRig(const Rig& rig, const SkinSetup& setup, const Progress& pro
           if (!b.error.empty()) return b.error;
         return std::string("none");
       }() + ")");
+}
+
+std::vector<PrimitiveCoverage> primitive_coverage(const FittedRig& fitted) {
+  const Rig& r = fitted.rig();
+  const std::vector<BonePart>& bones = fitted.bones();
+  const int nj = static_cast<int>(r.joints.size());
+  // The nearest ancestor with a primitive, per joint (-1: none).
+  std::vector<int> up(static_cast<std::size_t>(nj), -1);
+  for (int j = 0; j < nj; ++j) {
+    int p = r.joints[j].parent;
+    while (p >= 0 && !bones[p].fitted) p = r.joints[p].parent;
+    up[j] = p;
+  }
+  const std::vector<int>& owner = fitted.partition();
+  std::vector<PrimitiveCoverage> out;
+  for (const BonePart& b : bones) {
+    if (!b.fitted) continue;
+    PrimitiveCoverage c;
+    c.joint = b.joint;
+    const implicit::FieldPtr field = b.fit.field();
+    for (Eigen::Index v = 0; v < r.rest.rows(); ++v) {
+      const int o = owner[static_cast<std::size_t>(v)];
+      if (o == b.joint) {
+        ++c.own;
+        continue;
+      }
+      const Vec3d q = b.fit.local_to_world.apply_inverse(Vec3d{r.rest(v, 0), r.rest(v, 1), r.rest(v, 2)});
+      if (!(field->eval(Vec3f{float(q.x), float(q.y), float(q.z)}).value > 0.5f)) continue;
+      (up[b.joint] == o || up[o] == b.joint ? c.related : c.unrelated)++;
+    }
+    out.push_back(c);
+  }
+  return out;
 }
 
 int FittedRig::fitted_count() const {

@@ -36,6 +36,7 @@ struct BonePart {
   Eigen::Vector3d end{};
   bool fitted{false};
   std::string error;         ///< why the joint has no primitive (no vertices, failed fit)
+  int merged_into{-1};       ///< the joint that took this joint's vertices after a failed fit
   implicit::FittedPart fit;  ///< valid when `fitted`
 };
 
@@ -58,6 +59,21 @@ class FittedRig {
   std::vector<BonePart> bones_;
   double fit_seconds_{0};
 };
+
+/// How far a primitive's inside reaches at rest, counted over the rest vertices with a field
+/// value above 0.5 by their joint in the partition: a primitive holding many vertices of
+/// unrelated joints reaches where it should not (e.g. a thigh primitive over the belly, which
+/// spoils every pose that moves the thigh; docs/skinning.md, "fitting").
+struct PrimitiveCoverage {
+  int joint{-1};
+  int own{0};        ///< vertices of its partition (inside or not)
+  int related{0};    ///< vertices inside it of the primitives next to it in the tree (parent, children)
+  int unrelated{0};  ///< vertices inside it of every other joint
+};
+
+/// One entry per fitted joint, in joint order. "Next in the tree": the nearest ancestor with a
+/// primitive, and the joints whose nearest ancestor with a primitive this joint is.
+std::vector<PrimitiveCoverage> primitive_coverage(const FittedRig& fitted);
 
 /// Stray islands: connected components of a joint's vertex set other than its largest go to the
 /// joint most of their boundary neighbours belong to (repeated until stable).
