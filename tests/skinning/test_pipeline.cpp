@@ -53,8 +53,20 @@ TEST_CASE("pipeline: bends, sub-steps and pose scripts", "[skinning][pipeline]")
   // in ceil(1 deg / 0.05 rad) = 1.
   const auto small = bend_animation(r, {parse_bend("Bone1:z:2", r)}, 3);
   CHECK(substeps(r, small[0], small[1], o) == 1);
-  // At 140 degrees a 10-degree step is below a third of the bend: one sub-step.
+  // At 140 degrees a 10-degree step is below a third of the bend and of the 30 degrees left
+  // before the fold closes: one sub-step.
   CHECK(substeps(r, poses[14], poses[15], o) == 1);
+  // 112.5 -> 150 degrees in one frame (a 9-frame bend): the paper's rule alone allows 50-degree
+  // sub-steps (one), the fold rule a third of the 30 degrees left: ceil(37.5 / 10) = 4.
+  const auto coarse = bend_animation(r, {parse_bend("Bone1:z:150", r)}, 9);
+  CHECK(substeps(r, coarse[3], coarse[4], o) == 4);
+  o.fold_rule = false;
+  CHECK(substeps(r, coarse[3], coarse[4], o) == 1);
+  o.paper_rule = false;
+  CHECK(substeps(r, coarse[3], coarse[4], o) == 1);  // no rule at all
+  o.fold_rule = true;  // the fold rule alone: near rest its floor (3 min_step) keeps steps finite
+  CHECK(substeps(r, coarse[3], coarse[4], o) == 4);
+  CHECK(substeps(r, coarse[0], coarse[1], o) == 1);
   const auto script = pose_script_from_json(
       r, R"({"keys": [{"frame": 0}, {"frame": 4, "joints": {"Bone1": [["z", 80]]}}]})", "script.json");
   REQUIRE(script.size() == 5);
@@ -178,6 +190,8 @@ TEST_CASE("pipeline: bad input to the skinner is rejected naming the item", "[sk
       setup_from_json(R"({"tracker": {"lazy_evaluation": false}})", "s.json").tracker.lazy_evaluation);
   CHECK_THROWS_WITH(setup_from_json(R"({"tracker": {"relaxation": "gauss"}})", "s.json"),
                     Catch::Contains("s.json.tracker.relaxation") && Catch::Contains("cg"));
+  CHECK(s.substeps.fold_rule);
+  CHECK_FALSE(setup_from_json(R"({"substeps": {"fold_rule": false}})", "s.json").substeps.fold_rule);
   CHECK(s.fit.opening_offset == 0.1);
   CHECK(setup_from_json(R"({"fit": {"opening_offset": 1}})", "s.json").fit.opening_offset == 1.0);
   CHECK_THROWS_WITH(setup_from_json(R"({"fit": {"opening_offset": -0.5}})", "s.json"),

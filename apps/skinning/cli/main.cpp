@@ -166,8 +166,9 @@ int main(int argc, char** argv) {
   bake->add_option("--frames", frames, "frames of a --bend animation (rest, peak, rest)")
       ->capture_default_str();
   bake->add_option("--fps", fps, "clip sampling / output frame rate")->capture_default_str();
-  bake->add_option("--max-step-rad", max_step,
-                   "largest joint rotation per tracking sub-step (0 = paper rule only)");
+  bake->add_option(
+      "--max-step-rad", max_step,
+      "largest joint rotation per tracking sub-step (0 = the 2014 sub-step rule only, docs/skinning.md)");
   bake->add_option("--setup", setup_path, "JSON setup file: per-joint operators, relaxation, options");
   bake->add_option("--out", out, "baked .glb (one morph target per frame)")->required();
   bake->add_option("--metrics", metrics, "write the quality metrics (QUALITY.md) as JSON");
@@ -188,8 +189,9 @@ int main(int argc, char** argv) {
   // rule: with the rule alone the knee's return path leaves thigh vertices trapped in the contact
   // operator's valley (docs/skinning.md, "Known limits").
   double demo_max_step = 0.05;
-  demo->add_option("--max-step-rad", demo_max_step,
-                   "largest joint rotation per tracking sub-step (0 = paper rule only)")
+  demo->add_option(
+          "--max-step-rad", demo_max_step,
+          "largest joint rotation per tracking sub-step (0 = the 2014 sub-step rule only, docs/skinning.md)")
       ->capture_default_str();
 
   CLI11_PARSE(app, argc, argv);

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
@@ -149,13 +150,17 @@ int substeps(const Rig& rig, const Pose& a, const Pose& b, const SubstepOptions&
     d.linear() = rigid_part(a[j]).linear().transpose() * rigid_part(b[j]).linear();
     const double step = rotation_angle(d);
     if (step <= 0) continue;
-    if (o.paper_rule) {
+    if (o.paper_rule || o.fold_rule) {
       // Bending angle: the joint's rotation away from rest, at either end of the step.
       Affine ea = Affine::Identity(), eb = Affine::Identity();
       ea.linear() = rigid_part(rest[j]).linear().transpose() * rigid_part(a[j]).linear();
       eb.linear() = rigid_part(rest[j]).linear().transpose() * rigid_part(b[j]).linear();
-      const double bend = std::max({rotation_angle(ea), rotation_angle(eb), 3.0 * o.min_step_rad});
-      n = std::max(n, static_cast<int>(std::ceil(step / (bend / 3.0) - 1e-9)));
+      const double bend = std::max(rotation_angle(ea), rotation_angle(eb));
+      const double floor = 3.0 * o.min_step_rad;
+      double limit = std::numeric_limits<double>::infinity();
+      if (o.paper_rule) limit = std::max(bend, floor) / 3.0;
+      if (o.fold_rule) limit = std::min(limit, std::max(kPi - bend, floor) / 3.0);
+      n = std::max(n, static_cast<int>(std::ceil(step / limit - 1e-9)));
     }
     if (o.max_step_rad > 0) n = std::max(n, static_cast<int>(std::ceil(step / o.max_step_rad - 1e-9)));
   }

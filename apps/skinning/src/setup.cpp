@@ -191,8 +191,9 @@ SkinSetup setup_from_json(const std::string& text, const std::string& source) {
   if (j.contains("substeps")) {
     const json& p = j.at("substeps");
     const std::string w = source + ".substeps";
-    check_keys(p, {"paper_rule", "min_step_rad", "max_step_rad", "max_substeps"}, w);
+    check_keys(p, {"paper_rule", "fold_rule", "min_step_rad", "max_step_rad", "max_substeps"}, w);
     read(p, "paper_rule", s.substeps.paper_rule, w);
+    read(p, "fold_rule", s.substeps.fold_rule, w);
     read(p, "min_step_rad", s.substeps.min_step_rad, w);
     read(p, "max_step_rad", s.substeps.max_step_rad, w);
     read(p, "max_substeps", s.substeps.max_substeps, w);

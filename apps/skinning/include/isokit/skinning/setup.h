@@ -16,7 +16,7 @@
 ///                "initial_newton_steps": 10, "smoothing_steps": 5, "beta_diffusion_steps": 3,
 ///                "relaxation": "jacobi" },
 ///   "projector": { "sigma": 0.35, "max_iterations": 50, "contact_angle_deg": 55 },
-///   "substeps": { "paper_rule": true, "min_step_rad": 0.05, "max_step_rad": 0 } }
+///   "substeps": { "paper_rule": true, "fold_rule": true, "min_step_rad": 0.05, "max_step_rad": 0 } }
 /// ```
 /// `tree`: "auto" (the method's paper), "2013" or "2014". `default_operator`: "auto" (2014:
 /// contact, 2013: blend), "union", "blend", "bulge" or "contact". `tracker.relaxation`: "jacobi"
@@ -47,10 +47,14 @@ struct JointSettings {
 
 /// Animation sub-stepping (2014 §5.2): a step is split so that no joint rotates by more than a
 /// third of its current bending angle (`paper_rule`; the bending angle is floored at
-/// `3 * min_step_rad` so steps near the rest pose stay finite), and by no more than
-/// `max_step_rad` (> 0 enables it; `--max-step-rad`).
+/// `3 * min_step_rad` so steps near the rest pose stay finite), nor (`fold_rule`) by more than a
+/// third of the angle left before its bones fold onto each other (π minus the bending angle,
+/// floored the same way), and by no more than `max_step_rad` (> 0 enables it; `--max-step-rad`).
+/// The paper's sentence reads both ways; `fold_rule` keeps the steps small where a fold closes
+/// (docs/skinning.md, "sub-steps").
 struct SubstepOptions {
   bool paper_rule{true};
+  bool fold_rule{true};
   double min_step_rad{0.05};
   double max_step_rad{0.0};
   int max_substeps{1000};
