@@ -332,13 +332,8 @@ std::vector<PrimitiveCoverage> primitive_coverage(const FittedRig& fitted) {
   const Rig& r = fitted.rig();
   const std::vector<BonePart>& bones = fitted.bones();
   const int nj = static_cast<int>(r.joints.size());
-  // The nearest ancestor with a primitive, per joint (-1: none).
-  std::vector<int> up(static_cast<std::size_t>(nj), -1);
-  for (int j = 0; j < nj; ++j) {
-    int p = r.joints[j].parent;
-    while (p >= 0 && !bones[p].fitted) p = r.joints[p].parent;
-    up[j] = p;
-  }
+  std::vector<int> up(static_cast<std::size_t>(nj));
+  for (int j = 0; j < nj; ++j) up[j] = fitted.primitive_parent(j);
   const std::vector<int>& owner = fitted.partition();
   std::vector<PrimitiveCoverage> out;
   for (const BonePart& b : bones) {
@@ -359,6 +354,13 @@ std::vector<PrimitiveCoverage> primitive_coverage(const FittedRig& fitted) {
     out.push_back(c);
   }
   return out;
+}
+
+int FittedRig::primitive_parent(int joint) const {
+  int p = rig_->joints[static_cast<std::size_t>(joint)].parent;
+  while (p >= 0 && !bones_[static_cast<std::size_t>(p)].fitted)
+    p = rig_->joints[static_cast<std::size_t>(p)].parent;
+  return p;
 }
 
 int FittedRig::fitted_count() const {
@@ -400,8 +402,7 @@ SkinField::SkinField(const FittedRig& fitted, const SkinSetup& setup, TreeKind t
   for (int j = 0; j < nj; ++j) {
     const BonePart& b = fitted.bones()[j];
     if (!b.fitted) continue;
-    int p = r.joints[j].parent;
-    while (p >= 0 && index[p] < 0) p = r.joints[p].parent;
+    const int p = fitted.primitive_parent(j);
     index[j] = static_cast<int>(sk.parent.size());
     sk.parent.push_back(p >= 0 ? index[p] : -1);
     sk.parts.push_back(b.fit.field());

@@ -51,6 +51,8 @@ class FittedRig {
   const std::vector<int>& partition() const { return partition_; }
   const std::vector<BonePart>& bones() const { return bones_; }  ///< one per joint
   int fitted_count() const;
+  /// The nearest ancestor of `joint` that has a primitive (-1: none): its parent in the tree.
+  int primitive_parent(int joint) const;
   double fit_seconds() const { return fit_seconds_; }
 
  private:
