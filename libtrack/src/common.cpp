@@ -183,6 +183,73 @@ int contact_smoothing(const Adjacency& adj, const std::vector<std::uint8_t>& con
   return count;
 }
 
+int fold_repair(const FieldFunction& field, const Triangles& triangles, const Adjacency& adj,
+                const Adjacency& vertex_faces, const std::vector<std::uint8_t>& rest_inverted,
+                const std::vector<std::uint8_t>& lost, const FoldRepairOptions& options, std::size_t grain,
+                std::vector<Vec3f>& pts, std::vector<float>& beta, std::vector<std::uint8_t>& touched) {
+  const std::size_t n = pts.size(), nf = static_cast<std::size_t>(triangles.rows());
+  std::vector<std::uint8_t> tested(nf, 0), in(n, 0), moved(n, 0);
+  std::vector<int> candidates, region;
+  // The triangles the contact smoothing may have changed: those around a vertex with β > 0.
+  auto add_faces_of = [&](int i) {
+    for (int k = vertex_faces.offsets[i]; k < vertex_faces.offsets[i + 1]; ++k) {
+      const int f = vertex_faces.neighbors[k];
+      if (!tested[f]) tested[f] = 1, candidates.push_back(f);
+    }
+  };
+  for (std::size_t i = 0; i < n; ++i)
+    if (beta[i] > 0.f) add_faces_of(static_cast<int>(i));
+  std::vector<Vec3f> buf;
+  int count = 0;
+  for (int round = 0; round < options.rounds && !candidates.empty(); ++round) {
+    std::sort(candidates.begin(), candidates.end());
+    const std::vector<std::uint8_t> inverted = inverted_triangles(field, pts, triangles, grain, &candidates);
+    region.clear();
+    for (int f : candidates) {
+      tested[static_cast<std::size_t>(f)] = 0;
+      if (!inverted[static_cast<std::size_t>(f)] || (!rest_inverted.empty() && rest_inverted[f])) continue;
+      for (int k = 0; k < 3; ++k) {
+        const int v = triangles(f, k);
+        if (!in[v]) in[v] = 1, region.push_back(v);
+      }
+    }
+    candidates.clear();
+    if (region.empty()) break;
+    for (int r = 0, begin = 0; r < options.rings; ++r) {
+      const int end = static_cast<int>(region.size());
+      for (int a = begin; a < end; ++a)
+        for (int k = adj.offsets[region[a]]; k < adj.offsets[region[a] + 1]; ++k)
+          if (!in[adj.neighbors[k]]) in[adj.neighbors[k]] = 1, region.push_back(adj.neighbors[k]);
+      begin = end;
+    }
+    std::sort(region.begin(), region.end());
+    buf.resize(region.size());
+    for (int s = 0; s < options.steps; ++s) {
+      parallel_for(region.size(), grain, [&](std::size_t b, std::size_t e) {
+        for (std::size_t a = b; a < e; ++a) {
+          const int i = region[a];
+          const int deg = adj.degree(i);
+          buf[a] = pts[i];
+          if (deg == 0 || lost[i]) continue;
+          Vec3f c{};
+          for (int k = adj.offsets[i]; k < adj.offsets[i + 1]; ++k) c += pts[adj.neighbors[k]];
+          buf[a] = c / static_cast<float>(deg);
+        }
+      });
+      for (std::size_t a = 0; a < region.size(); ++a) pts[region[a]] = buf[a];
+    }
+    for (int i : region) {
+      in[i] = 0;
+      if (lost[i]) continue;
+      if (!moved[i]) moved[i] = 1, ++count;
+      beta[i] = 1.f;
+      touched[i] = 1;
+      add_faces_of(i);
+    }
+  }
+  return count;
+}
+
 void eval_field(const FieldFunction& field, const Vec3f* pts, std::size_t n, float* values, Vec3f* grads,
                 std::uint8_t* contact, std::size_t grain) {
   parallel_for(n, grain, [&](std::size_t b, std::size_t e) {

@@ -57,6 +57,8 @@ void check_options(const TrackerOptions& o) {
           "cg_max_iterations and cg_rings must be >= 1", "use e.g. 200 and 2");
   require(o.smoothing.beta_diffusion_steps >= 0 && o.smoothing.smoothing_steps >= 0, "SmoothingOptions",
           "step counts must be >= 0", "pass non-negative counts");
+  require(o.fold_repair.rounds >= 0 && o.fold_repair.steps >= 0 && o.fold_repair.rings >= 0,
+          "FoldRepairOptions", "rounds, steps and rings must be >= 0", "use e.g. 8, 5 and 2 (0 rounds: off)");
 }
 
 }  // namespace
@@ -631,6 +633,12 @@ TrackStats IsoSurfaceTracker::track(const FieldFunction& field, const std::vecto
   if (options_.smoothing.smoothing_steps > 0)
     for (std::size_t i = 0; i < n; ++i)
       if (flags_.beta[i] > 0.f) touched[i] = 1;
+  if (options_.fold_repair.rounds > 0 && options_.fold_repair.steps > 0) {
+    detail::fold_repair(field, triangles_, adj_, vertex_faces_, rest_inverted_, flags_.lost,
+                        options_.fold_repair, options_.grain, cur, flags_.beta, touched);
+    stats.smoothed_vertices = 0;
+    for (std::size_t i = 0; i < n; ++i) stats.smoothed_vertices += flags_.beta[i] > 0.f ? 1 : 0;
+  }
   detail::final_stats_touched(field, cur, triangles_, vertex_faces_, iso_, values, touched, options_.grain,
                               flags_, stats, inverted);
   last_inverted_ = inverted;

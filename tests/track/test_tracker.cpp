@@ -338,6 +338,63 @@ TEST_CASE("tracker: a fold left by the relaxation is smoothed like a contact", "
   }
 }
 
+TEST_CASE("tracker: the fold repair smooths a fold that the contact smoothing left", "[track][tracker]") {
+  // A vertex pushed far across its neighbours: one smoothing step on the fold's vertices alone
+  // (no β diffusion) leaves triangles inverted; the repair's rounds over the fold and two rings
+  // around it untangle them.
+  const test::Mesh m = capsule_mesh(0.5f, 0.f, 24, 0, 12);
+  auto sphere = std::make_shared<implicit::SphereField>(Vec3f{0, 0, 0}, 0.5f);
+  const FieldFunction field = test::as_function(sphere);
+  const std::vector<float> iso = sample_iso_values(field, m.V);
+  const Eigen::Index v = 100;
+  IsoSurfaceTracker probe(m.V, m.F, iso);
+  const auto& adj = probe.adjacency();
+  Positions folded = m.V;
+  // The one-ring and two-ring reflected through v (a patch turned inside out).
+  std::vector<int> patch{static_cast<int>(v)};
+  for (int ring = 0, begin = 0; ring < 2; ++ring) {
+    const int end = static_cast<int>(patch.size());
+    for (int a = begin; a < end; ++a)
+      for (int k = adj.offsets[patch[a]]; k < adj.offsets[patch[a] + 1]; ++k)
+        if (std::find(patch.begin(), patch.end(), adj.neighbors[k]) == patch.end())
+          patch.push_back(adj.neighbors[k]);
+    begin = end;
+  }
+  for (int u : patch) folded.row(u) = 2.f * m.V.row(v) - m.V.row(u);
+  const int before = count_inverted_triangles(field, folded, m.F);
+  REQUIRE(before > 0);
+  TrackerOptions o;
+  o.initial_newton_steps = 0;  // only the contact stage runs
+  o.max_iterations = 0;
+  o.smoothing = {0, 1};
+  auto run = [&](const TrackerOptions& opt, Positions& P) {
+    IsoSurfaceTracker tracker(m.V, m.F, iso, opt);
+    return tracker.track(field, {}, P);
+  };
+  o.fold_repair.rounds = 0;
+  Positions plain = folded;
+  const TrackStats without = run(o, plain);
+  o.fold_repair = FoldRepairOptions{};
+  Positions repaired = folded;
+  const TrackStats with = run(o, repaired);
+  INFO("inverted before " << before << ", after the contact smoothing " << without.inverted_triangles
+                          << ", with the fold repair " << with.inverted_triangles);
+  CHECK(without.inverted_triangles > 0);
+  CHECK(with.inverted_triangles == 0);
+  CHECK(count_inverted_triangles(field, repaired, m.F) == 0);  // the statistic is exact
+  CHECK(with.smoothed_vertices > without.smoothed_vertices);
+  // Only the fold's neighbourhood moved.
+  int moved = 0;
+  for (Eigen::Index i = 0; i < m.V.rows(); ++i)
+    moved += (repaired.row(i) - folded.row(i)).norm() > 0.f ? 1 : 0;
+  CHECK(moved > 0);
+  CHECK(moved < m.V.rows() / 4);
+  SECTION("bad options are refused by name") {
+    o.fold_repair.rings = -1;
+    CHECK_THROWS_WITH(IsoSurfaceTracker(m.V, m.F, iso, o), Catch::Contains("FoldRepairOptions"));
+  }
+}
+
 TEST_CASE("tracker: serial and parallel runs are bit-identical", "[track][tracker]") {
   // Defaults (Chebyshev on), 0 -> 150 -> 0: contacts, folds and smoothing included.
   Elbow a, b;

@@ -155,7 +155,8 @@ SkinSetup setup_from_json(const std::string& text, const std::string& source) {
     const std::string w = source + ".tracker";
     check_keys(t,
                {"max_iterations", "tolerance", "sigma", "contact_angle_deg", "initial_newton_steps",
-                "smoothing_steps", "beta_diffusion_steps", "angle_contacts", "relaxation", "lazy_evaluation"},
+                "smoothing_steps", "beta_diffusion_steps", "angle_contacts", "relaxation", "lazy_evaluation",
+                "fold_repair_rounds", "fold_repair_steps", "fold_repair_rings"},
                w);
     std::string relaxation = "jacobi";
     read(t, "relaxation", relaxation, w);
@@ -173,6 +174,13 @@ SkinSetup setup_from_json(const std::string& text, const std::string& source) {
     read(t, "beta_diffusion_steps", s.tracker.smoothing.beta_diffusion_steps, w);
     read(t, "angle_contacts", s.tracker.angle_contacts, w);
     read(t, "lazy_evaluation", s.tracker.lazy_evaluation, w);
+    read(t, "fold_repair_rounds", s.tracker.fold_repair.rounds, w);
+    read(t, "fold_repair_steps", s.tracker.fold_repair.steps, w);
+    read(t, "fold_repair_rings", s.tracker.fold_repair.rings, w);
+    require(s.tracker.fold_repair.rounds >= 0 && s.tracker.fold_repair.steps >= 0 &&
+                s.tracker.fold_repair.rings >= 0,
+            w + ".fold_repair_*", "must be >= 0",
+            "use e.g. 8 rounds of 5 steps over 2 rings (0 rounds: off)");
   }
   if (j.contains("projector")) {
     const json& p = j.at("projector");

@@ -12,7 +12,8 @@
 ///    relaxation mask, followed by one Newton projection — until the largest move is below
 ///    `tolerance` or `max_iterations`. The Jacobi steps are Chebyshev-accelerated
 ///    (`chebyshev_rho`; 0 = plain Jacobi as in 2014);
-/// 3. localised Laplacian smoothing with diffused β at contact vertices (2013 §5, eq. 7).
+/// 3. localised Laplacian smoothing with diffused β at contact vertices (2013 §5, eq. 7), then
+///    (`fold_repair`) more smoothing around the triangles still inverted.
 /// Contacts: flagged by the field, or (rule on) the gradient turned by more than
 /// `contact_angle` between two consecutive evaluations, or (`fold_contacts`) a vertex of a
 /// triangle left inverted by the relaxation. Every turn halves the vertex's Newton and tangential
@@ -34,6 +35,17 @@ namespace isokit::track {
 struct SmoothingOptions {
   int beta_diffusion_steps{2};  ///< β <- mean of β over the closed one-ring, repeated
   int smoothing_steps{3};       ///< v <- (1 - β) v + β centroid(one-ring), repeated
+};
+
+/// Fold repair after the contact smoothing (not in the papers; docs/tracking.md, "Fold repair"):
+/// the triangles still inverted are found again (QUALITY.md's test, at their centroids), and
+/// their vertices with `rings` rings of neighbours around them take `steps` more Laplacian steps
+/// (β = 1); repeated until none is left or `rounds` times. A fold the contact smoothing did not
+/// untangle is a few edges wide; the rings reach past it.
+struct FoldRepairOptions {
+  int rounds{8};  ///< 0 = off
+  int steps{5};   ///< Laplacian steps per round
+  int rings{2};   ///< neighbour rings added around the inverted triangles' vertices
 };
 
 /// How the tangential ARAP energy is minimised between Newton projections (2014 §5.2).
@@ -68,6 +80,8 @@ struct TrackerOptions {
   /// Vertices of triangles still inverted after the relaxation (a crease the angle rule missed)
   /// are contact vertices too, so that the contact smoothing sees them (not in the papers).
   bool fold_contacts{true};
+  /// Rounds of extra smoothing of the triangles still inverted after the contact smoothing.
+  FoldRepairOptions fold_repair{};
   /// Fold test and inverted-triangle statistics: false = only the triangles whose normal deviates
   /// by more than 45° from -∇f at one of their vertices (or with a contact or lost vertex, or
   /// inverted at rest or in the last call) are tested at their centroid — about 5 % of them on a
