@@ -125,6 +125,34 @@ TEST_CASE("pipeline: tracking2014 on the capsule beats LBS and DQS at 150 degree
   CHECK(trk.stats[0].metrics.max_displacement < 1e-6);
 }
 
+TEST_CASE("pipeline: the axis guard puts back the vertices that crossed their bone's axis",
+          "[skinning][pipeline]") {
+  Skinner sk(testing::capsule_rig(), fast_setup());
+  const Rig& rig = sk.rig();
+  const AxisGuard guard(sk.fitted());
+  const auto skin = skinning_matrices(rig, rest_pose(rig));
+  // At rest (and under any rigid motion of the whole rig) nothing moves.
+  isokit::track::Positions P = rig.rest;
+  CHECK(guard.apply(skin, P) == 0);
+  CHECK(P == rig.rest);
+  // Mirror a vertex of the lower bone's tube through its axis (the capsule runs along +y, bones
+  // on the y axis): it is put back on its own side, at 0.2 of its rest distance from the axis.
+  Eigen::Index v = -1;
+  for (Eigen::Index i = 0; i < rig.rest.rows() && v < 0; ++i)
+    if (rig.rest(i, 1) > 0.4f && rig.rest(i, 1) < 0.6f) v = i;
+  REQUIRE(v >= 0);
+  const Eigen::Vector3f r = rig.rest.row(v);
+  P.row(v) = Eigen::Vector3f(-r.x(), r.y(), -r.z()).transpose();
+  P(v + 1, 0) *= 0.5f;  // moved towards the axis but not across: left alone
+  const Eigen::Vector3f neighbour = P.row(v + 1);
+  CHECK(guard.apply(skin, P) == 1);
+  CHECK(P(v, 1) == Approx(r.y()).margin(1e-5));
+  const Eigen::Vector2f radial(P(v, 0), P(v, 2)), rest_radial(r.x(), r.z());
+  CHECK(radial.dot(rest_radial) > 0.f);
+  CHECK(radial.norm() == Approx(0.2f * rest_radial.norm()).margin(1e-4));
+  CHECK(Eigen::Vector3f(P.row(v + 1)) == neighbour);
+}
+
 TEST_CASE("pipeline: the fit report counts where each primitive reaches at rest", "[skinning][pipeline]") {
   Skinner sk(testing::capsule_rig(), fast_setup());
   const std::vector<PrimitiveCoverage> cov = primitive_coverage(sk.fitted());
@@ -182,6 +210,8 @@ TEST_CASE("pipeline: bad input to the skinner is rejected naming the item", "[sk
   CHECK(s.substeps.fold_rule);
   CHECK_FALSE(setup_from_json(R"({"substeps": {"fold_rule": false}})", "s.json").substeps.fold_rule);
   CHECK(s.tracker.fold_repair.rounds == 8);
+  CHECK(s.axis_guard);
+  CHECK_FALSE(setup_from_json(R"({"tracker": {"axis_guard": false}})", "s.json").axis_guard);
   const SkinSetup fr = setup_from_json(
       R"({"tracker": {"fold_repair_rounds": 0, "fold_repair_steps": 3, "fold_repair_rings": 1}})", "s.json");
   CHECK(fr.tracker.fold_repair.rounds == 0);

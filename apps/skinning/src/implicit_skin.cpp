@@ -328,6 +328,48 @@ FittedRig::FittedRig(const Rig& rig, const SkinSetup& setup, const Progress& pro
       }() + ")");
 }
 
+AxisGuard::AxisGuard(const FittedRig& fitted, double offset) : fitted_(&fitted), offset_(offset) {
+  const Rig& r = fitted.rig();
+  const std::size_t nv = static_cast<std::size_t>(r.rest.rows());
+  own_.assign(nv, -1);
+  radial_.assign(nv, Eigen::Vector2d::Zero());
+  for (std::size_t v = 0; v < nv; ++v) {
+    const int j = fitted.partition()[v];
+    if (j < 0 || !fitted.bones()[static_cast<std::size_t>(j)].fitted) continue;
+    const implicit::FittedPart& part = fitted.bones()[static_cast<std::size_t>(j)].fit;
+    const Vec3d p{r.rest(static_cast<Eigen::Index>(v), 0), r.rest(static_cast<Eigen::Index>(v), 1),
+                  r.rest(static_cast<Eigen::Index>(v), 2)};
+    const Vec3d l = part.local_to_world.apply_inverse(p);  // bone frame: +z along the bone
+    const Eigen::Vector2d a(l.x, l.y);
+    if (!(a.norm() >= 0.5 * part.r)) continue;
+    own_[v] = j;
+    radial_[v] = a;
+  }
+}
+
+int AxisGuard::apply(const std::vector<Affine>& skin, track::Positions& positions) const {
+  const auto& bones = fitted_->bones();
+  std::vector<Affine> to_local(bones.size(), Affine::Identity());
+  for (const BonePart& b : bones)
+    if (b.fitted)
+      to_local[static_cast<std::size_t>(b.joint)] =
+          (rigid_part(skin[b.joint]) * to_affine(b.fit.local_to_world)).inverse();
+  int moved = 0;
+  for (Eigen::Index v = 0; v < positions.rows(); ++v) {
+    const int j = own_[static_cast<std::size_t>(v)];
+    if (j < 0) continue;
+    const Eigen::Vector2d& a = radial_[static_cast<std::size_t>(v)];
+    const Affine& L = to_local[static_cast<std::size_t>(j)];
+    const Eigen::Vector3d l = L * positions.row(v).transpose().cast<double>();
+    const Eigen::Vector2d b(l.x(), l.y());
+    if (a.dot(b) >= 0) continue;
+    const Eigen::Vector2d c = b - (a.dot(b) / a.squaredNorm()) * a + offset_ * a;
+    positions.row(v) = (L.inverse() * Eigen::Vector3d(c.x(), c.y(), l.z())).transpose().cast<float>();
+    ++moved;
+  }
+  return moved;
+}
+
 std::vector<PrimitiveCoverage> primitive_coverage(const FittedRig& fitted) {
   const Rig& r = fitted.rig();
   const std::vector<BonePart>& bones = fitted.bones();

@@ -183,6 +183,7 @@ BakeResult Skinner::bake(Method method, const std::vector<Pose>& poses, const Ba
   const std::vector<int>& partition = fitted_->partition();
 
   std::unique_ptr<track::IsoSurfaceTracker> tracker;
+  std::unique_ptr<AxisGuard> guard;
   std::unique_ptr<track::Projector2013> projector;
   SkinField* field = nullptr;
   if (method == Method::kTracking2014) {
@@ -196,6 +197,7 @@ BakeResult Skinner::bake(Method method, const std::vector<Pose>& poses, const Ba
     std::vector<float> mask(static_cast<std::size_t>(nv));
     for (int v = 0; v < nv; ++v) mask[v] = setup_.relaxation_for(rig_.joints[partition[v]].name);
     tracker->set_relaxation_mask(std::move(mask));
+    if (setup_.axis_guard) guard = std::make_unique<AxisGuard>(*fitted_);
   } else if (method == Method::kImplicit2013) {
     field = &this->field(setup_.tree == TreeKind::k2014 ? TreeKind::k2014 : TreeKind::k2013);
     field->set_pose(skinning_matrices(rig_, rest));
@@ -251,6 +253,7 @@ BakeResult Skinner::bake(Method method, const std::vector<Pose>& poses, const Ba
             }
           });
           dual_quaternion_blend(rig_.weights, sk, rig_.rest, scratch, &rotations, options.grain);
+          if (guard) st.axis_guard_moves += guard->apply(sk, current);
           field->set_pose(sk);
           const track::TrackStats ts = tracker->track(field->function(), rotations, current);
           st.iterations += ts.iterations;

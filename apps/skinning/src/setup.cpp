@@ -156,7 +156,7 @@ SkinSetup setup_from_json(const std::string& text, const std::string& source) {
     check_keys(t,
                {"max_iterations", "tolerance", "sigma", "contact_angle_deg", "initial_newton_steps",
                 "smoothing_steps", "beta_diffusion_steps", "angle_contacts", "relaxation", "lazy_evaluation",
-                "fold_repair_rounds", "fold_repair_steps", "fold_repair_rings"},
+                "fold_repair_rounds", "fold_repair_steps", "fold_repair_rings", "axis_guard"},
                w);
     std::string relaxation = "jacobi";
     read(t, "relaxation", relaxation, w);
@@ -174,6 +174,7 @@ SkinSetup setup_from_json(const std::string& text, const std::string& source) {
     read(t, "beta_diffusion_steps", s.tracker.smoothing.beta_diffusion_steps, w);
     read(t, "angle_contacts", s.tracker.angle_contacts, w);
     read(t, "lazy_evaluation", s.tracker.lazy_evaluation, w);
+    read(t, "axis_guard", s.axis_guard, w);
     read(t, "fold_repair_rounds", s.tracker.fold_repair.rounds, w);
     read(t, "fold_repair_steps", s.tracker.fold_repair.steps, w);
     read(t, "fold_repair_rings", s.tracker.fold_repair.rings, w);

@@ -77,6 +77,27 @@ struct PrimitiveCoverage {
 /// primitive, and the joints whose nearest ancestor with a primitive this joint is.
 std::vector<PrimitiveCoverage> primitive_coverage(const FittedRig& fitted);
 
+/// Guard against vertices that crossed their own bone's axis (not in the papers; docs/skinning.md,
+/// "Decision: the axis guard"). Past what the field can fold (a joint bent to 170°: the limbs'
+/// fields merge), the tracker can push a vertex through its bone's axis; the Newton projection
+/// then takes it to the far side of its own limb, the limb flattens into a sheet and never comes
+/// back. A vertex at least half its primitive's `r` from the bone axis at rest whose radial
+/// direction in its primitive's frame now makes more than 90° with its rest radial direction is
+/// put back on its own side: the radial component along the rest one is set to `offset` times
+/// the rest one (the rest is kept).
+class AxisGuard {
+ public:
+  explicit AxisGuard(const FittedRig& fitted, double offset = 0.2);
+  /// Moves the crossed vertices of `positions` (welded, posed by `skin`); returns how many.
+  int apply(const std::vector<Affine>& skin, track::Positions& positions) const;
+
+ private:
+  const FittedRig* fitted_;
+  double offset_;
+  std::vector<int> own_;                 // primitive joint per vertex (-1: none, or too close to the axis)
+  std::vector<Eigen::Vector2d> radial_;  // rest radial vector in the primitive's frame
+};
+
 /// Stray islands: connected components of a joint's vertex set other than its largest go to the
 /// joint most of their boundary neighbours belong to (repeated until stable).
 std::vector<int> clean_partition(const std::vector<int>& labels, const track::Triangles& triangles,

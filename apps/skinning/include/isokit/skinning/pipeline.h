@@ -47,6 +47,8 @@ struct FrameStats {
   /// updates with lazy evaluation), or vertices × projector steps (implicit2013).
   double field_evaluations{0};
   int lost_vertices{0};  ///< vertices without a usable gradient (left in place by the tracker)
+  int axis_guard_moves{
+      0};                ///< vertices put back across their bone's axis (`AxisGuard`, summed over sub-steps)
   FrameMetrics metrics;  ///< all quality metrics (field ones with the 2014 tree)
 };
 

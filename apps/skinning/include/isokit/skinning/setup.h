@@ -71,6 +71,9 @@ struct SkinSetup {
   track::TrackerOptions tracker{};
   track::ProjectorOptions projector{};
   SubstepOptions substeps{};
+  /// tracking2014: put vertices that crossed their own bone's axis back on their side before each
+  /// sub-step (`AxisGuard`; not in the papers). Setup key `tracker.axis_guard`.
+  bool axis_guard{true};
 
   /// The operator chosen for `joint` (resolving kAuto with the tree kind).
   JointOperator operator_for(const std::string& joint, TreeKind tree) const;
