@@ -185,8 +185,9 @@ int contact_smoothing(const Adjacency& adj, const std::vector<std::uint8_t>& con
 
 int fold_repair(const FieldFunction& field, const Triangles& triangles, const Adjacency& adj,
                 const Adjacency& vertex_faces, const std::vector<std::uint8_t>& rest_inverted,
-                const std::vector<std::uint8_t>& lost, const FoldRepairOptions& options, std::size_t grain,
-                std::vector<Vec3f>& pts, std::vector<float>& beta, std::vector<std::uint8_t>& touched) {
+                const std::vector<std::uint8_t>& lost, const std::vector<std::uint8_t>& movable,
+                const FoldRepairOptions& options, std::size_t grain, std::vector<Vec3f>& pts,
+                std::vector<float>& beta, std::vector<std::uint8_t>& touched) {
   const std::size_t n = pts.size(), nf = static_cast<std::size_t>(triangles.rows());
   std::vector<std::uint8_t> tested(nf, 0), in(n, 0), moved(n, 0);
   std::vector<int> candidates, region;
@@ -215,6 +216,12 @@ int fold_repair(const FieldFunction& field, const Triangles& triangles, const Ad
     }
     candidates.clear();
     if (region.empty()) break;
+    if (round == 0 && static_cast<double>(region.size()) > options.max_fraction * static_cast<double>(n)) {
+      // The field disagrees with the mesh broadly (an under-resolved rig): smoothing would
+      // erase the shape rather than untangle a fold.
+      for (int i : region) in[i] = 0;
+      break;
+    }
     for (int r = 0, begin = 0; r < options.rings; ++r) {
       const int end = static_cast<int>(region.size());
       for (int a = begin; a < end; ++a)
@@ -230,7 +237,7 @@ int fold_repair(const FieldFunction& field, const Triangles& triangles, const Ad
           const int i = region[a];
           const int deg = adj.degree(i);
           buf[a] = pts[i];
-          if (deg == 0 || lost[i]) continue;
+          if (deg == 0 || lost[i] || (!movable.empty() && !movable[i])) continue;
           Vec3f c{};
           for (int k = adj.offsets[i]; k < adj.offsets[i + 1]; ++k) c += pts[adj.neighbors[k]];
           buf[a] = c / static_cast<float>(deg);
@@ -240,7 +247,7 @@ int fold_repair(const FieldFunction& field, const Triangles& triangles, const Ad
     }
     for (int i : region) {
       in[i] = 0;
-      if (lost[i]) continue;
+      if (lost[i] || (!movable.empty() && !movable[i])) continue;
       if (!moved[i]) moved[i] = 1, ++count;
       beta[i] = 1.f;
       touched[i] = 1;

@@ -52,12 +52,14 @@ int contact_smoothing(const Adjacency& adj, const std::vector<std::uint8_t>& con
 /// Fold repair (TrackerOptions::fold_repair): tests the triangles around the vertices with β > 0
 /// (moved by the contact smoothing); the vertices of those inverted (and not `rest_inverted`),
 /// grown by `rings` rings, take `steps` double-buffered Laplacian steps and get β = 1 and
-/// `touched`; the triangles around them are tested again, up to `rounds` rounds. `lost` vertices
-/// stay where they are. Returns the number of vertices moved.
+/// `touched`; the triangles around them are tested again, up to `rounds` rounds. `lost` vertices,
+/// and those with `movable[i] == 0` (when `movable` is not empty), stay where they are. Nothing is done when
+/// the first round's vertices exceed `max_fraction` of the mesh. Returns the number of vertices moved.
 int fold_repair(const FieldFunction& field, const Triangles& triangles, const Adjacency& adj,
                 const Adjacency& vertex_faces, const std::vector<std::uint8_t>& rest_inverted,
-                const std::vector<std::uint8_t>& lost, const FoldRepairOptions& options, std::size_t grain,
-                std::vector<Vec3f>& pts, std::vector<float>& beta, std::vector<std::uint8_t>& touched);
+                const std::vector<std::uint8_t>& lost, const std::vector<std::uint8_t>& movable,
+                const FoldRepairOptions& options, std::size_t grain, std::vector<Vec3f>& pts,
+                std::vector<float>& beta, std::vector<std::uint8_t>& touched);
 
 /// Per triangle: 1 if its normal `(b - a) x (c - a)` points along `+∇f` at its centroid
 /// (`dot > 0`; a zero gradient does not count), the definition of an inverted triangle.

@@ -57,6 +57,10 @@ void check_options(const TrackerOptions& o) {
           "cg_max_iterations and cg_rings must be >= 1", "use e.g. 200 and 2");
   require(o.smoothing.beta_diffusion_steps >= 0 && o.smoothing.smoothing_steps >= 0, "SmoothingOptions",
           "step counts must be >= 0", "pass non-negative counts");
+  require(std::isfinite(o.fold_repair.max_fraction) && o.fold_repair.max_fraction >= 0 &&
+              o.fold_repair.max_fraction <= 1,
+          "FoldRepairOptions::max_fraction",
+          "must be in [0, 1] (got " + format_number(o.fold_repair.max_fraction) + ")", "use e.g. 0.1");
   require(o.fold_repair.rounds >= 0 && o.fold_repair.steps >= 0 && o.fold_repair.rings >= 0,
           "FoldRepairOptions", "rounds, steps and rings must be >= 0", "use e.g. 8, 5 and 2 (0 rounds: off)");
 }
@@ -108,6 +112,14 @@ void IsoSurfaceTracker::set_relaxation_mask(std::vector<float> mask) {
     require(mask[i] >= 0.f && mask[i] <= 1.f, "relaxation mask vertex " + std::to_string(i),
             "is outside [0, 1] (" + format_number(mask[i]) + ")", "use 0 (no tangential move) .. 1");
   mask_ = order_.empty() ? std::move(mask) : permuted(mask, order_);
+}
+
+void IsoSurfaceTracker::set_fold_repair_mask(std::vector<std::uint8_t> mask) {
+  require(mask.empty() || mask.size() == mask_.size(), "fold repair mask",
+          "size " + std::to_string(mask.size()) + " differs from the vertex count " +
+              std::to_string(mask_.size()),
+          "pass one flag per vertex, or none");
+  repair_mask_ = order_.empty() || mask.empty() ? std::move(mask) : permuted(mask, order_);
 }
 
 Adjacency IsoSurfaceTracker::adjacency() const {
@@ -634,7 +646,7 @@ TrackStats IsoSurfaceTracker::track(const FieldFunction& field, const std::vecto
     for (std::size_t i = 0; i < n; ++i)
       if (flags_.beta[i] > 0.f) touched[i] = 1;
   if (options_.fold_repair.rounds > 0 && options_.fold_repair.steps > 0) {
-    detail::fold_repair(field, triangles_, adj_, vertex_faces_, rest_inverted_, flags_.lost,
+    detail::fold_repair(field, triangles_, adj_, vertex_faces_, rest_inverted_, flags_.lost, repair_mask_,
                         options_.fold_repair, options_.grain, cur, flags_.beta, touched);
     stats.smoothed_vertices = 0;
     for (std::size_t i = 0; i < n; ++i) stats.smoothed_vertices += flags_.beta[i] > 0.f ? 1 : 0;

@@ -125,6 +125,29 @@ TEST_CASE("pipeline: tracking2014 on the capsule beats LBS and DQS at 150 degree
   CHECK(trk.stats[0].metrics.max_displacement < 1e-6);
 }
 
+TEST_CASE("pipeline: parts smaller than fold_repair_min_part_vertices are not fold-repaired",
+          "[skinning][pipeline][slow]") {
+  // Every part of the capsule (~640 vertices) under the limit: the same frames as without the
+  // fold repair.
+  SkinSetup off = fast_setup(), small = fast_setup();
+  off.tracker.fold_repair.rounds = 0;
+  small.fold_repair_min_part_vertices = 1000;
+  Skinner a(testing::capsule_rig(), off), b(testing::capsule_rig(), small),
+      c(testing::capsule_rig(), fast_setup());
+  const auto poses = bend_animation(a.rig(), {parse_bend("Bone1:z:150", a.rig())}, 31);
+  BakeOptions o;
+  o.metrics = false;
+  const BakeResult ra = a.bake(Method::kTracking2014, poses, o), rb = b.bake(Method::kTracking2014, poses, o),
+                   rc = c.bake(Method::kTracking2014, poses, o);
+  bool same = true, differs = false;
+  for (std::size_t f = 0; f < poses.size(); ++f) {
+    same = same && ra.frames[f] == rb.frames[f];
+    differs = differs || !(ra.frames[f] == rc.frames[f]);
+  }
+  CHECK(same);
+  CHECK(differs);  // with the default limit the repair acts on this fold
+}
+
 TEST_CASE("pipeline: the axis guard puts back the vertices that crossed their bone's axis",
           "[skinning][pipeline]") {
   Skinner sk(testing::capsule_rig(), fast_setup());
@@ -211,6 +234,13 @@ TEST_CASE("pipeline: bad input to the skinner is rejected naming the item", "[sk
   CHECK_FALSE(setup_from_json(R"({"substeps": {"fold_rule": false}})", "s.json").substeps.fold_rule);
   CHECK(s.tracker.fold_repair.rounds == 8);
   CHECK(s.axis_guard);
+  CHECK(s.fold_repair_min_part_vertices == 50);
+  CHECK(s.tracker.fold_repair.max_fraction == 0.1);
+  CHECK(setup_from_json(
+            R"({"tracker": {"fold_repair_min_part_vertices": 0, "fold_repair_max_fraction": 0.5}})", "s.json")
+            .tracker.fold_repair.max_fraction == 0.5);
+  CHECK_THROWS_WITH(setup_from_json(R"({"tracker": {"fold_repair_min_part_vertices": -3}})", "s.json"),
+                    Catch::Contains("fold_repair_min_part_vertices"));
   CHECK_FALSE(setup_from_json(R"({"tracker": {"axis_guard": false}})", "s.json").axis_guard);
   const SkinSetup fr = setup_from_json(
       R"({"tracker": {"fold_repair_rounds": 0, "fold_repair_steps": 3, "fold_repair_rings": 1}})", "s.json");

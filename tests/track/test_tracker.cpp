@@ -389,9 +389,28 @@ TEST_CASE("tracker: the fold repair smooths a fold that the contact smoothing le
     moved += (repaired.row(i) - folded.row(i)).norm() > 0.f ? 1 : 0;
   CHECK(moved > 0);
   CHECK(moved < m.V.rows() / 4);
+  SECTION("vertices outside the fold repair mask stay in place") {
+    IsoSurfaceTracker tracker(m.V, m.F, iso, o);
+    tracker.set_fold_repair_mask(std::vector<std::uint8_t>(static_cast<std::size_t>(m.V.rows()), 0));
+    Positions masked = folded;
+    tracker.track(field, {}, masked);
+    CHECK(masked == plain);
+    CHECK_THROWS_WITH(tracker.set_fold_repair_mask(std::vector<std::uint8_t>(3, 1)),
+                      Catch::Contains("fold repair mask"));
+  }
+  SECTION("a fold over more than max_fraction of the mesh is left alone (an under-resolved field)") {
+    o.fold_repair.max_fraction = 0.001;
+    Positions skipped = folded;
+    const TrackStats s = run(o, skipped);
+    CHECK(s.inverted_triangles == without.inverted_triangles);
+    CHECK(skipped == plain);
+  }
   SECTION("bad options are refused by name") {
     o.fold_repair.rings = -1;
     CHECK_THROWS_WITH(IsoSurfaceTracker(m.V, m.F, iso, o), Catch::Contains("FoldRepairOptions"));
+    o.fold_repair = FoldRepairOptions{};
+    o.fold_repair.max_fraction = 1.5;
+    CHECK_THROWS_WITH(IsoSurfaceTracker(m.V, m.F, iso, o), Catch::Contains("max_fraction"));
   }
 }
 

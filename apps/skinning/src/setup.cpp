@@ -156,7 +156,8 @@ SkinSetup setup_from_json(const std::string& text, const std::string& source) {
     check_keys(t,
                {"max_iterations", "tolerance", "sigma", "contact_angle_deg", "initial_newton_steps",
                 "smoothing_steps", "beta_diffusion_steps", "angle_contacts", "relaxation", "lazy_evaluation",
-                "fold_repair_rounds", "fold_repair_steps", "fold_repair_rings", "axis_guard"},
+                "fold_repair_rounds", "fold_repair_steps", "fold_repair_rings", "fold_repair_max_fraction",
+                "fold_repair_min_part_vertices", "axis_guard"},
                w);
     std::string relaxation = "jacobi";
     read(t, "relaxation", relaxation, w);
@@ -178,6 +179,12 @@ SkinSetup setup_from_json(const std::string& text, const std::string& source) {
     read(t, "fold_repair_rounds", s.tracker.fold_repair.rounds, w);
     read(t, "fold_repair_steps", s.tracker.fold_repair.steps, w);
     read(t, "fold_repair_rings", s.tracker.fold_repair.rings, w);
+    read(t, "fold_repair_max_fraction", s.tracker.fold_repair.max_fraction, w);
+    read(t, "fold_repair_min_part_vertices", s.fold_repair_min_part_vertices, w);
+    require(s.fold_repair_min_part_vertices >= 0, w + ".fold_repair_min_part_vertices", "must be >= 0",
+            "use e.g. 50 (0: no limit)");
+    require(s.tracker.fold_repair.max_fraction >= 0 && s.tracker.fold_repair.max_fraction <= 1,
+            w + ".fold_repair_max_fraction", "must be in [0, 1]", "use e.g. 0.1");
     require(s.tracker.fold_repair.rounds >= 0 && s.tracker.fold_repair.steps >= 0 &&
                 s.tracker.fold_repair.rings >= 0,
             w + ".fold_repair_*", "must be >= 0",

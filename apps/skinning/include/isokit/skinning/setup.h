@@ -74,6 +74,13 @@ struct SkinSetup {
   /// tracking2014: put vertices that crossed their own bone's axis back on their side before each
   /// sub-step (`AxisGuard`; not in the papers). Setup key `tracker.axis_guard`.
   bool axis_guard{true};
+  /// tracking2014: the fold repair (TrackerOptions::fold_repair) leaves alone the vertices of
+  /// parts with fewer vertices than this (0: no limit). A fold repair region (an inverted
+  /// triangle and two rings) holds 20 – 30 vertices; a part under about twice that is
+  /// under-resolved and smoothing would erase it (the 290-vertex Fox sample, 11 – 38 vertices per
+  /// part: volume 0.92 → 0.18 – 0.34 in its Survey clip). Setup key
+  /// `tracker.fold_repair_min_part_vertices`.
+  int fold_repair_min_part_vertices{50};
 
   /// The operator chosen for `joint` (resolving kAuto with the tree kind).
   JointOperator operator_for(const std::string& joint, TreeKind tree) const;
