@@ -6,6 +6,7 @@ function(run)
     message(FATAL_ERROR "isokit-skin ${ARGN} failed (${rc}):\n${out}\n${err}")
   endif()
   set(LAST_OUT "${out}" PARENT_SCOPE)
+  set(LAST_ERR "${err}" PARENT_SCOPE)
 endfunction()
 include(${CMAKE_CURRENT_LIST_DIR}/../png_check.cmake)
 
@@ -19,6 +20,17 @@ endif()
 run(info "procedural:finger?vertices=1500" --fit)
 if(NOT LAST_OUT MATCHES "primitives: 4 of 4" OR NOT LAST_OUT MATCHES "related / unrelated")
   message(FATAL_ERROR "info --fit does not report the primitives:\n${LAST_OUT}")
+endif()
+
+# A rig whose parts the mesh under-resolves gets a warning (and still bakes).
+run(bake "procedural:cylinder?vertices=80" --method tracking2014 --bend Bone1:z:90 --frames 5
+    --out "${OUT}/coarse/out.glb")
+if(NOT LAST_ERR MATCHES "under-resolves" OR NOT EXISTS "${OUT}/coarse/out.glb")
+  message(FATAL_ERROR "no under-resolved warning for an 80-vertex cylinder:\n${LAST_ERR}")
+endif()
+run(bake procedural:cylinder --method dqs --bend Bone1:z:90 --frames 5 --out "${OUT}/fine/out.glb")
+if(LAST_ERR MATCHES "under-resolves")
+  message(FATAL_ERROR "under-resolved warning on the 2,000-vertex cylinder:\n${LAST_ERR}")
 endif()
 
 # bake with every output on the cylinder.

@@ -260,6 +260,25 @@ int main(int argc, char** argv) {
       if (!b.fitted && !b.error.empty() && b.error != "no vertices")
         std::fprintf(stderr, "  warning: joint '%s' has no primitive: %s\n", rig.joints[b.joint].name.c_str(),
                      b.error.c_str());
+    // Under-resolved limbs (docs/skinning.md, "Low-poly rigs"): say so once.
+    if (setup.fold_repair_min_part_vertices > 0) {
+      int small = 0;
+      const BonePart* smallest = nullptr;
+      for (const BonePart& b : skinner.fitted().bones())
+        if (b.fitted && b.vertices < setup.fold_repair_min_part_vertices) {
+          ++small;
+          if (!smallest || b.vertices < smallest->vertices) smallest = &b;
+        }
+      if (smallest)
+        std::fprintf(
+            stderr,
+            "  warning: %d of %d primitives come from parts of fewer than %d vertices (smallest: '%s', %d): "
+            "the mesh under-resolves these limbs; the implicit methods may thin or bloat them and the fold "
+            "repair leaves them out (docs/skinning.md, \"Low-poly rigs\"); --method dqs is the safer "
+            "choice for such a rig\n",
+            small, skinner.fitted().fitted_count(), setup.fold_repair_min_part_vertices,
+            rig.joints[smallest->joint].name.c_str(), smallest->vertices);
+    }
     std::fprintf(stderr, "isokit-skin: %d primitives fitted in %.2f s (setup %.2f s)\n",
                  skinner.fitted().fitted_count(), skinner.fitted().fit_seconds(),
                  std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
