@@ -362,7 +362,7 @@ int AxisGuard::apply(const std::vector<Affine>& skin, track::Positions& position
     const Affine& L = to_local[static_cast<std::size_t>(j)];
     const Eigen::Vector3d l = L * positions.row(v).transpose().cast<double>();
     const Eigen::Vector2d b(l.x(), l.y());
-    if (a.dot(b) >= 0) continue;
+    if (!(a.dot(b) < 0)) continue;  // on its side (or not finite: the tracker deals with it)
     const Eigen::Vector2d c = b - (a.dot(b) / a.squaredNorm()) * a + offset_ * a;
     positions.row(v) = (L.inverse() * Eigen::Vector3d(c.x(), c.y(), l.z())).transpose().cast<float>();
     ++moved;
