@@ -124,6 +124,19 @@ void cotangent_weights(const std::vector<Vec3f>& rest, const Triangles& triangle
   }
 }
 
+namespace {
+// Appends to `region` the vertices within `rings` rings of it (breadth first); `in` flags members.
+void grow_rings(const Adjacency& adj, int rings, std::vector<int>& region, std::vector<std::uint8_t>& in) {
+  for (int r = 0, begin = 0; r < rings; ++r) {
+    const int end = static_cast<int>(region.size());
+    for (int a = begin; a < end; ++a)
+      for (int k = adj.offsets[region[a]]; k < adj.offsets[region[a] + 1]; ++k)
+        if (!in[adj.neighbors[k]]) in[adj.neighbors[k]] = 1, region.push_back(adj.neighbors[k]);
+    begin = end;
+  }
+}
+}  // namespace
+
 int contact_smoothing(const Adjacency& adj, const std::vector<std::uint8_t>& contact,
                       const SmoothingOptions& options, std::size_t grain, std::vector<Vec3f>& pts,
                       std::vector<float>& beta) {
@@ -136,13 +149,7 @@ int contact_smoothing(const Adjacency& adj, const std::vector<std::uint8_t>& con
   for (std::size_t i = 0; i < n; ++i)
     if (contact[i]) in[i] = 1, region.push_back(static_cast<int>(i));
   if (region.empty()) return 0;
-  for (int s = 0, begin = 0; s < options.beta_diffusion_steps; ++s) {
-    const int end = static_cast<int>(region.size());
-    for (int a = begin; a < end; ++a)
-      for (int k = adj.offsets[region[a]]; k < adj.offsets[region[a] + 1]; ++k)
-        if (!in[adj.neighbors[k]]) in[adj.neighbors[k]] = 1, region.push_back(adj.neighbors[k]);
-    begin = end;
-  }
+  grow_rings(adj, options.beta_diffusion_steps, region, in);
   std::sort(region.begin(), region.end());
   for (int i : region) beta[i] = contact[i] ? 1.f : 0.f;
   std::vector<float> next(n, 0.f);
@@ -222,13 +229,7 @@ int fold_repair(const FieldFunction& field, const Triangles& triangles, const Ad
       for (int i : region) in[i] = 0;
       break;
     }
-    for (int r = 0, begin = 0; r < options.rings; ++r) {
-      const int end = static_cast<int>(region.size());
-      for (int a = begin; a < end; ++a)
-        for (int k = adj.offsets[region[a]]; k < adj.offsets[region[a] + 1]; ++k)
-          if (!in[adj.neighbors[k]]) in[adj.neighbors[k]] = 1, region.push_back(adj.neighbors[k]);
-      begin = end;
-    }
+    grow_rings(adj, options.rings, region, in);
     std::sort(region.begin(), region.end());
     buf.resize(region.size());
     for (int s = 0; s < options.steps; ++s) {

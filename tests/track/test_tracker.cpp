@@ -304,11 +304,24 @@ TEST_CASE("tracker: Chebyshev acceleration recovers the rest pose faster than pl
   CHECK(with < 0.25f * without);
 }
 
+namespace {
+/// A sphere mesh of radius 0.5 on the field of the same sphere, with its rest iso-values.
+struct SphereOnField {
+  test::Mesh m;
+  FieldFunction field;
+  std::vector<float> iso;
+  SphereOnField(int around, int rings)
+      : m(capsule_mesh(0.5f, 0.f, around, 0, rings)),
+        field(test::as_function(std::make_shared<implicit::SphereField>(Vec3f{0, 0, 0}, 0.5f))),
+        iso(sample_iso_values(field, m.V)) {}
+};
+}  // namespace
+
 TEST_CASE("tracker: a fold left by the relaxation is smoothed like a contact", "[track][tracker]") {
-  const test::Mesh m = capsule_mesh(0.5f, 0.f, 16, 0, 8);
-  auto sphere = std::make_shared<implicit::SphereField>(Vec3f{0, 0, 0}, 0.5f);
-  const FieldFunction field = test::as_function(sphere);
-  const std::vector<float> iso = sample_iso_values(field, m.V);
+  const SphereOnField sp(16, 8);
+  const test::Mesh& m = sp.m;
+  const FieldFunction& field = sp.field;
+  const std::vector<float>& iso = sp.iso;
   // Push one vertex across its neighbour: the triangles between them fold over.
   const Eigen::Index v = 40;
   IsoSurfaceTracker probe(m.V, m.F, iso);
@@ -339,13 +352,13 @@ TEST_CASE("tracker: a fold left by the relaxation is smoothed like a contact", "
 }
 
 TEST_CASE("tracker: the fold repair smooths a fold that the contact smoothing left", "[track][tracker]") {
-  // A vertex pushed far across its neighbours: one smoothing step on the fold's vertices alone
-  // (no β diffusion) leaves triangles inverted; the repair's rounds over the fold and two rings
-  // around it untangle them.
-  const test::Mesh m = capsule_mesh(0.5f, 0.f, 24, 0, 12);
-  auto sphere = std::make_shared<implicit::SphereField>(Vec3f{0, 0, 0}, 0.5f);
-  const FieldFunction field = test::as_function(sphere);
-  const std::vector<float> iso = sample_iso_values(field, m.V);
+  // A patch turned inside out: one smoothing step on the fold's vertices alone (no β diffusion)
+  // leaves triangles inverted; the repair's rounds over the fold and two rings around it
+  // untangle them.
+  const SphereOnField sp(24, 12);
+  const test::Mesh& m = sp.m;
+  const FieldFunction& field = sp.field;
+  const std::vector<float>& iso = sp.iso;
   const Eigen::Index v = 100;
   IsoSurfaceTracker probe(m.V, m.F, iso);
   const auto& adj = probe.adjacency();
