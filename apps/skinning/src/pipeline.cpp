@@ -198,12 +198,13 @@ BakeResult Skinner::bake(Method method, const std::vector<Pose>& poses, const Ba
     for (int v = 0; v < nv; ++v) mask[v] = setup_.relaxation_for(rig_.joints[partition[v]].name);
     tracker->set_relaxation_mask(std::move(mask));
     if (setup_.fold_repair_min_part_vertices > 0) {
-      // Parts too small for the fold repair's smoothing (docs/skinning.md, "under-resolved rigs").
-      const int k = setup_.fold_repair_min_part_vertices;
-      std::vector<int> size(rig_.joints.size(), 0);
-      for (int v = 0; v < nv; ++v) ++size[static_cast<std::size_t>(partition[v])];
+      // Parts too small for the fold repair's smoothing (docs/skinning.md, "Low-poly rigs").
       std::vector<std::uint8_t> movable(static_cast<std::size_t>(nv));
-      for (int v = 0; v < nv; ++v) movable[v] = size[static_cast<std::size_t>(partition[v])] >= k ? 1 : 0;
+      for (int v = 0; v < nv; ++v)
+        movable[v] = fitted_->bones()[static_cast<std::size_t>(partition[v])].vertices >=
+                             setup_.fold_repair_min_part_vertices
+                         ? 1
+                         : 0;
       tracker->set_fold_repair_mask(std::move(movable));
     }
     if (setup_.axis_guard) guard = std::make_unique<AxisGuard>(*fitted_);
