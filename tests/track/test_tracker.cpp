@@ -319,9 +319,7 @@ struct SphereOnField {
 
 TEST_CASE("tracker: a fold left by the relaxation is smoothed like a contact", "[track][tracker]") {
   const SphereOnField sp(16, 8);
-  const test::Mesh& m = sp.m;
-  const FieldFunction& field = sp.field;
-  const std::vector<float>& iso = sp.iso;
+  const auto& [m, field, iso] = sp;
   // Push one vertex across its neighbour: the triangles between them fold over.
   const Eigen::Index v = 40;
   IsoSurfaceTracker probe(m.V, m.F, iso);
@@ -356,9 +354,7 @@ TEST_CASE("tracker: the fold repair smooths a fold that the contact smoothing le
   // leaves triangles inverted; the repair's rounds over the fold and two rings around it
   // untangle them.
   const SphereOnField sp(24, 12);
-  const test::Mesh& m = sp.m;
-  const FieldFunction& field = sp.field;
-  const std::vector<float>& iso = sp.iso;
+  const auto& [m, field, iso] = sp;
   const Eigen::Index v = 100;
   IsoSurfaceTracker probe(m.V, m.F, iso);
   const auto& adj = probe.adjacency();
