@@ -207,6 +207,7 @@ int fold_repair(const FieldFunction& field, const Triangles& triangles, const Ad
   };
   for (std::size_t i = 0; i < n; ++i)
     if (beta[i] > 0.f) add_faces_of(static_cast<int>(i));
+  auto pinned = [&](int i) { return lost[i] || (!movable.empty() && !movable[i]); };
   std::vector<Vec3f> buf;
   int count = 0;
   for (int round = 0; round < options.rounds && !candidates.empty(); ++round) {
@@ -238,7 +239,7 @@ int fold_repair(const FieldFunction& field, const Triangles& triangles, const Ad
           const int i = region[a];
           const int deg = adj.degree(i);
           buf[a] = pts[i];
-          if (deg == 0 || lost[i] || (!movable.empty() && !movable[i])) continue;
+          if (deg == 0 || pinned(i)) continue;
           Vec3f c{};
           for (int k = adj.offsets[i]; k < adj.offsets[i + 1]; ++k) c += pts[adj.neighbors[k]];
           buf[a] = c / static_cast<float>(deg);
@@ -248,7 +249,7 @@ int fold_repair(const FieldFunction& field, const Triangles& triangles, const Ad
     }
     for (int i : region) {
       in[i] = 0;
-      if (lost[i] || (!movable.empty() && !movable[i])) continue;
+      if (pinned(i)) continue;
       if (!moved[i]) moved[i] = 1, ++count;
       beta[i] = 1.f;
       touched[i] = 1;
