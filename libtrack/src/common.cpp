@@ -318,6 +318,19 @@ Adjacency vertex_faces(const Triangles& triangles, std::size_t num_vertices) {
   return out;
 }
 
+void refresh_values(const FieldFunction& field, const std::vector<Vec3f>& pts, const std::vector<int>& redo,
+                    std::size_t grain, std::vector<float>& values, VertexFlags& flags) {
+  std::vector<Vec3f> p(redo.size()), g(redo.size());
+  std::vector<float> v(redo.size());
+  std::vector<std::uint8_t> c(redo.size());
+  for (std::size_t a = 0; a < redo.size(); ++a) p[a] = pts[redo[a]];
+  eval_field(field, p.data(), p.size(), v.data(), g.data(), c.data(), grain);
+  for (std::size_t a = 0; a < redo.size(); ++a) {
+    values[redo[a]] = v[a];
+    if (c[a]) flags.contact[redo[a]] = 1;
+  }
+}
+
 void final_stats_touched(const FieldFunction& field, const std::vector<Vec3f>& pts,
                          const Triangles& triangles, const Adjacency& vertex_faces,
                          const std::vector<float>& iso, std::vector<float>& values,
@@ -333,17 +346,7 @@ void final_stats_touched(const FieldFunction& field, const std::vector<Vec3f>& p
       for (int k = vertex_faces.offsets[i]; k < vertex_faces.offsets[i + 1]; ++k)
         tri_redo[vertex_faces.neighbors[k]] = 1;
   }
-  {
-    std::vector<Vec3f> p(redo.size()), g(redo.size());
-    std::vector<float> v(redo.size());
-    std::vector<std::uint8_t> c(redo.size());
-    for (std::size_t a = 0; a < redo.size(); ++a) p[a] = pts[redo[a]];
-    eval_field(field, p.data(), p.size(), v.data(), g.data(), c.data(), grain);
-    for (std::size_t a = 0; a < redo.size(); ++a) {
-      values[redo[a]] = v[a];
-      if (c[a]) flags.contact[redo[a]] = 1;
-    }
-  }
+  refresh_values(field, pts, redo, grain, values, flags);
   std::vector<int> tris;
   for (std::size_t f = 0; f < tri_redo.size(); ++f)
     if (tri_redo[f]) tris.push_back(static_cast<int>(f));

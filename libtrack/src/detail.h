@@ -61,6 +61,18 @@ int fold_repair(const FieldFunction& field, const Triangles& triangles, const Ad
                 const FoldRepairOptions& options, std::size_t grain, std::vector<Vec3f>& pts,
                 std::vector<float>& beta, std::vector<std::uint8_t>& touched);
 
+/// Orientation repair (TrackerOptions::orientation_repair): moves single vertices of the triangles
+/// flagged in `inverted` (and not `rest_inverted`) so that fewer of their triangles are inverted,
+/// never to a position where one of its triangles crosses another triangle; `pinned` vertices
+/// (when not empty) stay. Updates `inverted` for the triangles around the moved vertices and
+/// returns the moved vertices (sorted).
+std::vector<int> orientation_repair(const FieldFunction& field, const Triangles& triangles,
+                                    const Adjacency& vertex_faces,
+                                    const std::vector<std::uint8_t>& rest_inverted,
+                                    const std::vector<std::uint8_t>& pinned,
+                                    const OrientationRepairOptions& options, std::vector<Vec3f>& pts,
+                                    std::vector<std::uint8_t>& inverted);
+
 /// Per triangle: 1 if its normal `(b - a) x (c - a)` points along `+∇f` at its centroid
 /// (`dot > 0`; a zero gradient does not count), the definition of an inverted triangle.
 /// With `candidates`, only the listed triangles are tested (the others get 0).
@@ -82,6 +94,11 @@ void final_stats(const FieldFunction& field, const std::vector<Vec3f>& pts, cons
 
 /// Triangles around each vertex, in CSR form (`neighbors` holds triangle indices).
 Adjacency vertex_faces(const Triangles& triangles, std::size_t num_vertices);
+
+/// Evaluates the field at the listed vertices: `values` updated, field contacts OR-ed into
+/// `flags.contact`.
+void refresh_values(const FieldFunction& field, const std::vector<Vec3f>& pts, const std::vector<int>& redo,
+                    std::size_t grain, std::vector<float>& values, VertexFlags& flags);
 
 /// Final statistics of the active-set tracker. `values` holds each vertex's value at its last
 /// evaluation; the vertices marked `touched` (moved after the first evaluation, or smoothed) are

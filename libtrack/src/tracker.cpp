@@ -63,6 +63,23 @@ void check_options(const TrackerOptions& o) {
           "must be in [0, 1] (got " + format_number(o.fold_repair.max_fraction) + ")", "use e.g. 0.1");
   require(o.fold_repair.rounds >= 0 && o.fold_repair.steps >= 0 && o.fold_repair.rings >= 0,
           "FoldRepairOptions", "rounds, steps and rings must be >= 0", "use e.g. 8, 5 and 2 (0 rounds: off)");
+  const OrientationRepairOptions& r = o.orientation_repair;
+  require(r.rounds >= 0 && r.samples >= 1, "OrientationRepairOptions",
+          "rounds must be >= 0 and samples >= 1 (got " + std::to_string(r.rounds) + ", " +
+              std::to_string(r.samples) + ")",
+          "use e.g. 8 and 8 (0 rounds: off)");
+  require(std::isfinite(r.max_move) && r.max_move > 0.f && r.max_move <= 4.f &&
+              std::isfinite(r.max_outward_move) && r.max_outward_move >= 0.f &&
+              r.max_outward_move <= r.max_move,
+          "OrientationRepairOptions::max_move / max_outward_move",
+          "must satisfy 0 < max_move <= 4 and 0 <= max_outward_move <= max_move (got " +
+              format_number(r.max_move) + ", " + format_number(r.max_outward_move) + ")",
+          "use e.g. 0.5 and 0.0625");
+  require(std::isfinite(r.margin) && r.margin >= 0.f && r.margin <= 1.f, "OrientationRepairOptions::margin",
+          "must be in [0, 1] (got " + format_number(r.margin) + ")", "use e.g. 0.05");
+  require(std::isfinite(r.max_fraction) && r.max_fraction >= 0 && r.max_fraction <= 1,
+          "OrientationRepairOptions::max_fraction",
+          "must be in [0, 1] (got " + format_number(r.max_fraction) + ")", "use e.g. 0.1");
 }
 
 }  // namespace
@@ -653,6 +670,24 @@ TrackStats IsoSurfaceTracker::track(const FieldFunction& field, const std::vecto
   }
   detail::final_stats_touched(field, cur, triangles_, vertex_faces_, iso_, values, touched, options_.grain,
                               flags_, stats, inverted);
+  if (options_.orientation_repair.rounds > 0 && stats.inverted_triangles > 0) {
+    std::vector<std::uint8_t> pinned(flags_.lost);
+    if (!repair_mask_.empty())
+      for (std::size_t i = 0; i < n; ++i) pinned[i] |= repair_mask_[i] ? 0 : 1;
+    const std::vector<int> oriented = detail::orientation_repair(
+        field, triangles_, vertex_faces_, rest_inverted_, pinned, options_.orientation_repair, cur, inverted);
+    stats.oriented_vertices = static_cast<int>(oriented.size());
+    if (!oriented.empty()) {
+      // Moved off their iso-values on purpose, like smoothed vertices: β = 1, out of the residual.
+      for (int i : oriented) flags_.beta[static_cast<std::size_t>(i)] = 1.f;
+      detail::refresh_values(field, cur, oriented, options_.grain, values, flags_);
+      stats.smoothed_vertices = 0;
+      for (std::size_t i = 0; i < n; ++i) stats.smoothed_vertices += flags_.beta[i] > 0.f ? 1 : 0;
+      detail::vertex_stats(values, iso_, flags_, stats);
+      stats.inverted_triangles = 0;
+      for (std::uint8_t f : inverted) stats.inverted_triangles += f;
+    }
+  }
   last_inverted_ = inverted;
   for (std::size_t i = 0; i < n; ++i)
     if (!detail::finite(cur[i])) cur[i] = detail::row(positions, static_cast<Eigen::Index>(user(i)));

@@ -128,9 +128,10 @@ TEST_CASE("pipeline: tracking2014 on the capsule beats LBS and DQS at 150 degree
 TEST_CASE("pipeline: parts smaller than fold_repair_min_part_vertices are not fold-repaired",
           "[skinning][pipeline][slow]") {
   // Every part of the capsule (~640 vertices) under the limit: the same frames as without the
-  // fold repair.
+  // fold and orientation repairs (the limit masks both).
   SkinSetup off = fast_setup(), small = fast_setup();
   off.tracker.fold_repair.rounds = 0;
+  off.tracker.orientation_repair.rounds = 0;
   small.fold_repair_min_part_vertices = 1000;
   Skinner a(testing::capsule_rig(), off), b(testing::capsule_rig(), small),
       c(testing::capsule_rig(), fast_setup());
@@ -249,6 +250,21 @@ TEST_CASE("pipeline: bad input to the skinner is rejected naming the item", "[sk
   CHECK(fr.tracker.fold_repair.rings == 1);
   CHECK_THROWS_WITH(setup_from_json(R"({"tracker": {"fold_repair_rings": -1}})", "s.json"),
                     Catch::Contains("s.json.tracker.fold_repair") && Catch::Contains(">= 0"));
+  CHECK(s.tracker.orientation_repair.rounds == 8);
+  const SkinSetup orient = setup_from_json(
+      R"({"tracker": {"orientation_repair_rounds": 2, "orientation_repair_max_move": 0.25,
+                       "orientation_repair_max_outward_move": 0}})",
+      "s.json");
+  CHECK(orient.tracker.orientation_repair.rounds == 2);
+  CHECK(orient.tracker.orientation_repair.max_move == 0.25f);
+  CHECK(orient.tracker.orientation_repair.max_outward_move == 0.f);
+  CHECK_THROWS_WITH(
+      setup_from_json(
+          R"({"tracker": {"orientation_repair_max_move": 0.1, "orientation_repair_max_outward_move": 0.2}})",
+          "s.json"),
+      Catch::Contains("s.json.tracker.orientation_repair_max_outward_move"));
+  CHECK_THROWS_WITH(setup_from_json(R"({"tracker": {"orientation_repair_rounds": -1}})", "s.json"),
+                    Catch::Contains("orientation_repair_rounds"));
   CHECK(s.fit.opening_offset == 0.1);
   CHECK(setup_from_json(R"({"fit": {"opening_offset": 1}})", "s.json").fit.opening_offset == 1.0);
   CHECK_THROWS_WITH(setup_from_json(R"({"fit": {"opening_offset": -0.5}})", "s.json"),

@@ -338,8 +338,9 @@ TEST_CASE("tracker: a fold left by the relaxation is smoothed like a contact", "
     CHECK(s.contact_vertices > 0);
     CHECK(s.inverted_triangles == 0);
   }
-  SECTION("fold_contacts off: nothing is smoothed, the fold stays") {
+  SECTION("fold_contacts and the orientation repair off: nothing is smoothed, the fold stays") {
     o.fold_contacts = false;
+    o.orientation_repair.rounds = 0;
     IsoSurfaceTracker tracker(m.V, m.F, iso, o);
     Positions P = folded;
     const TrackStats s = tracker.track(field, {}, P);
@@ -376,6 +377,7 @@ TEST_CASE("tracker: the fold repair smooths a fold that the contact smoothing le
   o.initial_newton_steps = 0;  // only the contact stage runs
   o.max_iterations = 0;
   o.smoothing = {0, 1};
+  o.orientation_repair.rounds = 0;  // the fold repair alone
   auto run = [&](const TrackerOptions& opt, Positions& P) {
     IsoSurfaceTracker tracker(m.V, m.F, iso, opt);
     return tracker.track(field, {}, P);
@@ -420,6 +422,125 @@ TEST_CASE("tracker: the fold repair smooths a fold that the contact smoothing le
     o.fold_repair = FoldRepairOptions{};
     o.fold_repair.max_fraction = 1.5;
     CHECK_THROWS_WITH(IsoSurfaceTracker(m.V, m.F, iso, o), Catch::Contains("max_fraction"));
+  }
+}
+
+namespace {
+/// The sphere's field below the plane y = floor and its mirror image above: a contact valley
+/// whose floor cuts the sphere's top cap, so that the triangles around the pole (centroids above
+/// the floor) face along the mirrored gradient: inverted, a hair on the wrong side.
+FieldFunction valley_field(float floor) {
+  auto sphere = test::as_function(std::make_shared<implicit::SphereField>(Vec3f{0, 0, 0}, 0.5f));
+  return [sphere, floor](const Vec3f* p, std::size_t n, float* v, Vec3f* g, std::uint8_t* c) {
+    for (std::size_t k = 0; k < n; ++k) {
+      const bool above = p[k].y > floor;
+      const Vec3f q = above ? Vec3f{p[k].x, 2.f * floor - p[k].y, p[k].z} : p[k];
+      sphere(&q, 1, v + k, g + k, c ? c + k : nullptr);
+      if (above) g[k].y = -g[k].y;
+    }
+  };
+}
+}  // namespace
+
+TEST_CASE("tracker: the orientation repair turns triangles on the wrong side of a contact floor",
+          "[track][tracker]") {
+  const SphereOnField sp(24, 12);  // pole at y = 0.5, first ring at y = 0.4957, r = 0.065
+  const auto& [m, rest_field, iso] = sp;
+  const FieldFunction field = valley_field(0.4965f);
+  const int before = count_inverted_triangles(field, m.V, m.F);
+  REQUIRE(before == 24);  // the pole's fan
+  TrackerOptions o;
+  o.initial_newton_steps = 0;  // only the contact stage runs, and it has nothing to smooth
+  o.max_iterations = 0;
+  o.fold_contacts = false;
+  o.fold_repair.rounds = 0;
+  auto run = [&](const TrackerOptions& opt, const Positions& V, const Triangles& F, Positions& P) {
+    IsoSurfaceTracker tracker(V, F, std::vector<float>(static_cast<std::size_t>(V.rows()), 0.5f), opt);
+    return tracker.track(field, {}, P);
+  };
+  SECTION("off: the fan stays inverted") {
+    o.orientation_repair.rounds = 0;
+    Positions P = m.V;
+    CHECK(run(o, m.V, m.F, P).inverted_triangles == before);
+    CHECK(P == m.V);
+  }
+  SECTION("on: a few cap vertices move by a fraction of an edge and none is left") {
+    Positions P = m.V;
+    const TrackStats s = run(o, m.V, m.F, P);
+    CHECK(s.inverted_triangles == 0);
+    CHECK(count_inverted_triangles(field, P, m.F) == 0);  // the statistic is exact
+    CHECK(s.oriented_vertices > 0);
+    int moved = 0;
+    for (Eigen::Index i = 0; i < m.V.rows(); ++i) {
+      const float d = (P.row(i) - m.V.row(i)).norm();
+      if (d == 0.f) continue;
+      ++moved;
+      CHECK(m.V(i, 1) > 0.49f);          // the pole and its ring only
+      CHECK(d <= 0.5f * 0.0655f * 8.f);  // at most max_move · h per round
+    }
+    CHECK(moved == s.oriented_vertices);
+    CHECK(moved <= 25);
+  }
+  SECTION("a move that would cross another triangle is refused") {
+    // A deeper floor (the fan and the next band inverted: 48) and a downward-facing disc just
+    // under the pole's fan, as wide as the first ring: the fan's vertices cannot go down past it
+    // without crossing it.
+    const FieldFunction deep = valley_field(0.490f);
+    const float y = 0.495f, radius = 0.068f;
+    const int sides = 16;
+    const Eigen::Index b = m.V.rows();
+    Positions V(b + sides + 1, 3);
+    V.topRows(b) = m.V;
+    V.row(b) << 0.f, y, 0.f;
+    for (int k = 0; k < sides; ++k) {
+      const float t = 2.f * kPi * float(k) / float(sides);
+      V.row(b + 1 + k) << radius * std::cos(t), y, radius * std::sin(t);
+    }
+    Triangles F(m.F.rows() + sides, 3);
+    F.topRows(m.F.rows()) = m.F;
+    for (int k = 0; k < sides; ++k)  // normal -y: not inverted above the floor
+      F.row(m.F.rows() + k) << int(b), int(b + 1 + k), int(b + 1 + (k + 1) % sides);
+    const int deep_before = count_inverted_triangles(deep, V, F);
+    REQUIRE(deep_before == 48);
+    auto lowest_under_disc = [&](const Positions& P) {
+      float low = 1.f;
+      for (Eigen::Index i = 0; i < b; ++i)
+        if (V(i, 1) > 0.f && std::hypot(V(i, 0), V(i, 2)) < radius) low = std::min(low, P(i, 1));
+      return low;
+    };
+    auto track_deep = [&](const Positions& rest, const Triangles& tris, Positions& P) {
+      IsoSurfaceTracker tracker(rest, tris, std::vector<float>(static_cast<std::size_t>(rest.rows()), 0.5f),
+                                o);
+      return tracker.track(deep, {}, P);
+    };
+    Positions free_cap = m.V;  // the sphere alone: the cap's vertices go below the disc's plane
+    const TrackStats unblocked = track_deep(m.V, m.F, free_cap);
+    CHECK(unblocked.inverted_triangles == 0);
+    CHECK(lowest_under_disc(free_cap) < y);
+    Positions P = V;  // with the disc: they stay above it
+    const TrackStats blocked = track_deep(V, F, P);
+    INFO("inverted: before " << deep_before << ", sphere alone " << unblocked.inverted_triangles
+                             << ", with the disc " << blocked.inverted_triangles);
+    CHECK(lowest_under_disc(P) > y);
+    CHECK(blocked.inverted_triangles > 0);
+    CHECK(P.bottomRows(sides + 1) == V.bottomRows(sides + 1));
+  }
+  SECTION("vertices outside the repair mask stay in place") {
+    IsoSurfaceTracker tracker(m.V, m.F, std::vector<float>(static_cast<std::size_t>(m.V.rows()), 0.5f), o);
+    tracker.set_fold_repair_mask(std::vector<std::uint8_t>(static_cast<std::size_t>(m.V.rows()), 0));
+    Positions P = m.V;
+    CHECK(tracker.track(field, {}, P).inverted_triangles == before);
+    CHECK(P == m.V);
+  }
+  SECTION("bad options are refused by name") {
+    o.orientation_repair.samples = 0;
+    CHECK_THROWS_WITH(IsoSurfaceTracker(m.V, m.F, iso, o), Catch::Contains("OrientationRepairOptions"));
+    o.orientation_repair = OrientationRepairOptions{};
+    o.orientation_repair.max_outward_move = 1.f;  // more than max_move
+    CHECK_THROWS_WITH(IsoSurfaceTracker(m.V, m.F, iso, o), Catch::Contains("max_outward_move"));
+    o.orientation_repair = OrientationRepairOptions{};
+    o.orientation_repair.margin = std::nanf("");
+    CHECK_THROWS_WITH(IsoSurfaceTracker(m.V, m.F, iso, o), Catch::Contains("margin"));
   }
 }
 

@@ -270,6 +270,7 @@ BakeResult Skinner::bake(Method method, const std::vector<Pose>& poses, const Ba
           st.vertex_updates += double(ts.vertex_updates);
           st.field_evaluations += double(ts.field_evaluations);
           st.lost_vertices = ts.lost_vertices;
+          st.oriented_vertices += ts.oriented_vertices;
           prev_skin = sk;
         }
         previous = poses[f];

@@ -157,7 +157,8 @@ SkinSetup setup_from_json(const std::string& text, const std::string& source) {
                {"max_iterations", "tolerance", "sigma", "contact_angle_deg", "initial_newton_steps",
                 "smoothing_steps", "beta_diffusion_steps", "angle_contacts", "relaxation", "lazy_evaluation",
                 "fold_repair_rounds", "fold_repair_steps", "fold_repair_rings", "fold_repair_max_fraction",
-                "fold_repair_min_part_vertices", "axis_guard"},
+                "fold_repair_min_part_vertices", "orientation_repair_rounds", "orientation_repair_max_move",
+                "orientation_repair_max_outward_move", "axis_guard"},
                w);
     std::string relaxation = "jacobi";
     read(t, "relaxation", relaxation, w);
@@ -189,6 +190,17 @@ SkinSetup setup_from_json(const std::string& text, const std::string& source) {
                 s.tracker.fold_repair.rings >= 0,
             w + ".fold_repair_*", "must be >= 0",
             "use e.g. 8 rounds of 5 steps over 2 rings (0 rounds: off)");
+    track::OrientationRepairOptions& r = s.tracker.orientation_repair;
+    read(t, "orientation_repair_rounds", r.rounds, w);
+    read(t, "orientation_repair_max_move", r.max_move, w);
+    read(t, "orientation_repair_max_outward_move", r.max_outward_move, w);
+    require(r.rounds >= 0, w + ".orientation_repair_rounds", "must be >= 0", "use e.g. 8 (0: off)");
+    require(std::isfinite(r.max_move) && r.max_move > 0.f && r.max_move <= 4.f,
+            w + ".orientation_repair_max_move", "must be in (0, 4] (edge lengths)", "use e.g. 0.5");
+    require(
+        std::isfinite(r.max_outward_move) && r.max_outward_move >= 0.f && r.max_outward_move <= r.max_move,
+        w + ".orientation_repair_max_outward_move", "must be in [0, orientation_repair_max_move]",
+        "use e.g. 0.0625");
   }
   if (j.contains("projector")) {
     const json& p = j.at("projector");

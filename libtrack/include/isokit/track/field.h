@@ -46,6 +46,7 @@ struct TrackStats {
   float mean_residual{0};     ///< mean of the same
   int contact_vertices{0};    ///< vertices flagged by the field or stopped by the gradient-angle rule
   int smoothed_vertices{0};   ///< vertices with diffused beta > 0 (moved by contact smoothing)
+  int oriented_vertices{0};   ///< vertices moved by the orientation repair (2014 tracker)
   int lost_vertices{0};       ///< zero / non-finite gradient: left in place (e.g. outside the support)
   int inverted_triangles{0};  ///< triangles whose normal points along +∇f at their centroid
   double seconds{0};          ///< wall time of the call

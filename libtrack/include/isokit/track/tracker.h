@@ -13,7 +13,8 @@
 ///    `tolerance` or `max_iterations`. The Jacobi steps are Chebyshev-accelerated
 ///    (`chebyshev_rho`; 0 = plain Jacobi as in 2014);
 /// 3. localised Laplacian smoothing with diffused β at contact vertices (2013 §5, eq. 7), then
-///    (`fold_repair`) more smoothing around the triangles still inverted.
+///    (`fold_repair`) more smoothing around the triangles still inverted, then
+///    (`orientation_repair`) single-vertex moves that turn the last ones the right way.
 /// Contacts: flagged by the field, or (rule on) the gradient turned by more than
 /// `contact_angle` between two consecutive evaluations, or (`fold_contacts`) a vertex of a
 /// triangle left inverted by the relaxation. Every turn halves the vertex's Newton and tangential
@@ -53,6 +54,29 @@ struct FoldRepairOptions {
   double max_fraction{0.1};
 };
 
+/// Orientation repair after the fold repair (not in the papers; docs/tracking.md, "Orientation
+/// repair"): a triangle still inverted lies across a contact valley's floor or the apex of a
+/// contact slit, where the gradient turns within a fraction of an edge, with its centroid a hair
+/// on the wrong side. Each vertex of such a triangle, one at a time, moves to the best of a few
+/// candidate positions along its normal, the field's inward direction at it and the normals of
+/// its inverted triangles: fewest inverted triangles around it, then the least
+/// `Σ max(0, n̂·∇f/|∇f| + margin)` over them; a candidate whose triangles would cross any other
+/// triangle of the mesh is refused. Repeated up to `rounds` times while a vertex moves.
+struct OrientationRepairOptions {
+  int rounds{8};   ///< 0 = off
+  int samples{8};  ///< candidate steps inward per direction, evenly up to `max_move`
+  /// Longest move into the skin (against the vertex normal and along the field's inward
+  /// direction), times the mean length of the vertex's edges.
+  float max_move{0.5f};
+  /// Longest move out of the skin, times the same length: outward is where the skin facing it
+  /// across a contact lies (longer outward moves made the 13k knee intersect itself).
+  float max_outward_move{0.0625f};
+  float margin{0.05f};  ///< makes near-perpendicular triangles count in the energy
+  /// No repair in a call whose inverted triangles' vertices exceed this fraction of the mesh (as
+  /// FoldRepairOptions::max_fraction).
+  double max_fraction{0.1};
+};
+
 /// How the tangential ARAP energy is minimised between Newton projections (2014 §5.2).
 enum class Relaxation {
   kJacobi,            ///< one Jacobi sweep per iteration (2014), Chebyshev-accelerated
@@ -87,6 +111,8 @@ struct TrackerOptions {
   bool fold_contacts{true};
   /// Rounds of extra smoothing of the triangles still inverted after the contact smoothing.
   FoldRepairOptions fold_repair{};
+  /// Vertex moves that turn the triangles left inverted after the fold repair the right way.
+  OrientationRepairOptions orientation_repair{};
   /// Fold test and inverted-triangle statistics: false = only the triangles whose normal deviates
   /// by more than 45° from -∇f at one of their vertices (or with a contact or lost vertex, or
   /// inverted at rest or in the last call) are tested at their centroid — about 5 % of them on a
@@ -131,7 +157,8 @@ class IsoSurfaceTracker {
   /// \throw InputError for a wrong size or a value outside [0, 1].
   void set_relaxation_mask(std::vector<float> mask);
 
-  /// Vertices the fold repair may move (1) or must leave in place (0); empty (the default): all.
+  /// Vertices the fold and orientation repairs may move (1) or must leave in place (0); empty (the
+  /// default): all.
   /// For callers that know where the mesh under-resolves the field (e.g. limbs of a few dozen
   /// vertices, where smoothing would erase the shape). \throw InputError for a wrong size.
   void set_fold_repair_mask(std::vector<std::uint8_t> mask);

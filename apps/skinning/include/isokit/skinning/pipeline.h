@@ -48,7 +48,9 @@ struct FrameStats {
   double field_evaluations{0};
   int lost_vertices{0};  ///< vertices without a usable gradient (left in place by the tracker)
   int axis_guard_moves{
-      0};                ///< vertices put back across their bone's axis (`AxisGuard`, summed over sub-steps)
+      0};  ///< vertices put back across their bone's axis (`AxisGuard`, summed over sub-steps)
+  /// Vertices moved by the tracker's orientation repair (summed over sub-steps).
+  int oriented_vertices{0};
   FrameMetrics metrics;  ///< all quality metrics (field ones with the 2014 tree)
 };
 
