@@ -74,7 +74,7 @@ void check_options(const TrackerOptions& o) {
           "OrientationRepairOptions::max_move / max_outward_move",
           "must satisfy 0 < max_move <= 4 and 0 <= max_outward_move <= max_move (got " +
               format_number(r.max_move) + ", " + format_number(r.max_outward_move) + ")",
-          "use e.g. 0.5 and 0.0625");
+          "use e.g. 0.5 and 0.125");
   require(std::isfinite(r.margin) && r.margin >= 0.f && r.margin <= 1.f, "OrientationRepairOptions::margin",
           "must be in [0, 1] (got " + format_number(r.margin) + ")", "use e.g. 0.05");
   require(std::isfinite(r.max_fraction) && r.max_fraction >= 0 && r.max_fraction <= 1,

@@ -200,7 +200,7 @@ SkinSetup setup_from_json(const std::string& text, const std::string& source) {
     require(
         std::isfinite(r.max_outward_move) && r.max_outward_move >= 0.f && r.max_outward_move <= r.max_move,
         w + ".orientation_repair_max_outward_move", "must be in [0, orientation_repair_max_move]",
-        "use e.g. 0.0625");
+        "use e.g. 0.125");
   }
   if (j.contains("projector")) {
     const json& p = j.at("projector");

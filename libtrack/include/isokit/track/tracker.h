@@ -69,8 +69,10 @@ struct OrientationRepairOptions {
   /// direction), times the mean length of the vertex's edges.
   float max_move{0.5f};
   /// Longest move out of the skin, times the same length: outward is where the skin facing it
-  /// across a contact lies (longer outward moves made the 13k knee intersect itself).
-  float max_outward_move{0.0625f};
+  /// across a contact lies (without the crossing test, moves of half an edge made the 13k knee
+  /// intersect itself; with it, 1/16, 1/8, 1/4 and 1/2 all leave 0 pairs, and 1/8 the fewest
+  /// inverted triangles without stretching edges: docs/tracking.md).
+  float max_outward_move{0.125f};
   float margin{0.05f};  ///< makes near-perpendicular triangles count in the energy
   /// No repair in a call whose inverted triangles' vertices exceed this fraction of the mesh (as
   /// FoldRepairOptions::max_fraction).
