@@ -286,6 +286,22 @@ void Tape::set_leaf_transform(std::size_t leaf, const Rigid3f& xf) {
   update_boxes();
 }
 
+const operators::ControllerTable& Tape::controller(std::size_t instruction) const {
+  require(instruction < instr_.size() && instr_[instruction].leaf < 0,
+          "tape instruction " + std::to_string(instruction),
+          "is not an inner node (" + std::to_string(instr_.size()) + " instructions)",
+          "use the index of an instruction with leaf < 0");
+  return controllers_[std::size_t(instr_[instruction].op)];
+}
+
+void Tape::set_controller(std::size_t instruction, const operators::ControllerTable& table) {
+  controller(instruction);  // validates the index
+  for (float v : table.values)
+    require(v >= 0.f && v <= 1.f, "tape controller for instruction " + std::to_string(instruction),
+            "has a value outside [0, 1] (or NaN)", "pass d(α) values in [0, 1]");
+  controllers_[std::size_t(instr_[instruction].op)] = table;
+}
+
 void Tape::set_transform_of(int id, const Rigid3f& xf) {
   validate_rigid(xf, "tape leaf transform");
   bool any = false;

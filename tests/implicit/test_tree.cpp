@@ -153,6 +153,39 @@ TEST_CASE("tape diagnostics report alpha, d, the dominant operand and contact", 
   }
 }
 
+TEST_CASE("a node's controller table can be replaced in place", "[tree]") {
+  auto a = std::make_shared<const SphereField>(Vec3f{-0.3f, 0, 0}, 0.5f);
+  auto b = std::make_shared<const SphereField>(Vec3f{0.3f, 0, 0}, 0.5f);
+  const auto grid = sampled_blend_grid();
+  auto tree_with = [&](const char* preset) {
+    return CompositionTree::node(NodeOperator::grid_operator(grid, ops::Controller::preset(preset), "g"),
+                                 CompositionTree::leaf(a), CompositionTree::leaf(b));
+  };
+  Tape tape(tree_with("contact"));
+  const Tape zero(tree_with("constant0"));
+  CHECK(tape.controller(2).values[255] == Approx(1.f));
+  // The contact controller replaced by d ≡ 0: the same field as a tape built with it, through
+  // the sparse evaluator and the instruction loop.
+  tape.set_controller(2, ops::Controller::preset("constant0").table());
+  CHECK(tape.controller(2).values[255] == 0.f);
+  test::Rng rng(35);
+  std::vector<NodeDiagnostics> diag(tape.size());
+  for (int k = 0; k < 200; ++k) {
+    const Vec3f p = test::to_float(rng.vec(-1, 1));
+    const FieldSample s = tape.eval(p), r = zero.eval(p);
+    REQUIRE(s.value == r.value);
+    REQUIRE(s.gradient == r.gradient);
+    REQUIRE(tape.eval(p, diag.data(), false).value == r.value);
+  }
+  CHECK_THROWS_WITH(tape.set_controller(0, ops::ControllerTable{}), Catch::Contains("not an inner node"));
+  CHECK_THROWS_WITH(tape.controller(3), Catch::Contains("tape instruction 3"));
+  ops::ControllerTable bad{};
+  bad.values[7] = std::nanf("");
+  CHECK_THROWS_WITH(tape.set_controller(2, bad), Catch::Contains("outside [0, 1]"));
+  bad.values[7] = 1.5f;
+  CHECK_THROWS_WITH(tape.set_controller(2, bad), Catch::Contains("outside [0, 1]"));
+}
+
 TEST_CASE("deep trees use a heap value stack with the same results", "[tree]") {
   // Right-deep chain: the value stack holds one entry per leaf (more than the 64 local slots).
   test::Rng rng(36);

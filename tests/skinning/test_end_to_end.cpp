@@ -241,3 +241,62 @@ TEST_CASE("e2e: full-body crouch on the 13k humanoid: no intersections, no captu
   CHECK(trk.worst.edge_distortion_max < 1.0);  // dqs: 0.80; a captured vertex stretches its edges 4-8x
   CHECK(trk.rest_recovery <= 1e-3);
 }
+
+// A `bulge` joint without the gate: inside the finger at rest the two phalanges' caps overlap
+// with gradients more than 90° apart, the bulge controller is 1 there and the operator's contact
+// line makes a valley inside the limb; skin that slides into it during the bend stays (rest
+// recovery 9.8e-2 on 2026-12-01). The gate caps the controller by the joint's bend.
+TEST_CASE("e2e: a bulge joint returns to rest with the bulge gate", "[skinning][e2e][slow]") {
+  SkinSetup on = fast_setup();
+  on.joints["Finger2"].op = JointOperator::kBulge;
+  SkinSetup off = on;
+  off.bulge_gate = false;
+  Skinner gated(make_finger(), on), plain(make_finger(), off);
+  const auto poses = bend_animation(gated.rig(), {parse_bend("Finger2:x:60", gated.rig())}, 31);
+  BakeOptions fast;
+  fast.self_intersections = false;
+  const BakeResult with = gated.bake(Method::kTracking2014, poses, fast);
+  const BakeResult without = plain.bake(Method::kTracking2014, poses, fast);
+  INFO("rest recovery with the gate " << with.rest_recovery << ", without " << without.rest_recovery);
+  CHECK(without.rest_recovery > 1e-2);
+  CHECK(with.rest_recovery <= 1e-3);
+  CHECK(with.worst.new_inverted_triangles == 0);
+  // At the bend the gate is open: the bulge is there (the volume grows past the contact
+  // operator's).
+  Skinner contact(make_finger(), fast_setup());
+  const BakeResult c = contact.bake(Method::kTracking2014, poses, fast);
+  INFO("volume ratio at the bend: bulge " << with.stats[15].metrics.volume_ratio << ", contact "
+                                          << c.stats[15].metrics.volume_ratio);
+  CHECK(with.stats[15].metrics.volume_ratio > c.stats[15].metrics.volume_ratio);
+}
+
+TEST_CASE("e2e: the bulge gate finds every bulge joint, chained ones too, in both trees",
+          "[skinning][e2e][slow]") {
+  // Three bulge joints in a chain: the 2014 builder pairs (Finger0, Finger1) and (Finger2,
+  // Finger3) at the bottom and joins the pairs by Finger2's bulge operator; the 2013 builder
+  // has one bulge pair per joint. At rest every gated node's controller is 0; bent, it opens.
+  for (TreeKind kind : {TreeKind::k2014, TreeKind::k2013}) {
+    for (bool gate : {true, false}) {
+      SkinSetup setup = fast_setup();
+      setup.bulge_gate = gate;
+      for (const char* j : {"Finger1", "Finger2", "Finger3"}) setup.joints[j].op = JointOperator::kBulge;
+      Skinner sk(make_finger(), setup);
+      SkinField& field = sk.field(kind);
+      auto closed = [&]() {
+        int n = 0;
+        const auto& instr = field.tape().instructions();
+        for (std::size_t i = 0; i < instr.size(); ++i)
+          if (instr[i].leaf < 0 && instr[i].kind == isokit::implicit::OpKind::Grid &&
+              field.tape().controller(i).values[255] == 0.f)
+            ++n;
+        return n;
+      };
+      field.set_pose(skinning_matrices(sk.rig(), rest_pose(sk.rig())));
+      INFO((kind == TreeKind::k2014 ? "2014" : "2013") << " tree, gate " << gate);
+      CHECK(closed() == (gate ? 3 : 0));
+      const auto bent = bend_animation(sk.rig(), {parse_bend("Finger2:x:90", sk.rig())}, 3)[1];
+      field.set_pose(skinning_matrices(sk.rig(), bent));
+      CHECK(closed() == (gate ? 2 : 0));  // Finger2's node opens (d_b(90°) = 1), the others stay shut
+    }
+  }
+}

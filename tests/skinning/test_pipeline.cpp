@@ -251,6 +251,10 @@ TEST_CASE("pipeline: bad input to the skinner is rejected naming the item", "[sk
   CHECK_THROWS_WITH(setup_from_json(R"({"tracker": {"fold_repair_rings": -1}})", "s.json"),
                     Catch::Contains("s.json.tracker.fold_repair") && Catch::Contains(">= 0"));
   CHECK(s.tracker.orientation_repair.rounds == 8);
+  CHECK(s.bulge_gate);
+  CHECK_FALSE(setup_from_json(R"({"operators": {"bulge_gate": false}})", "s.json").bulge_gate);
+  CHECK_THROWS_WITH(setup_from_json(R"({"operators": {"bulge_gate": 3}})", "s.json"),
+                    Catch::Contains("s.json.operators.bulge_gate"));
   const SkinSetup orient = setup_from_json(
       R"({"tracker": {"orientation_repair_rounds": 2, "orientation_repair_max_move": 0.25,
                        "orientation_repair_max_outward_move": 0}})",

@@ -487,6 +487,44 @@ SkinField::SkinField(const FittedRig& fitted, const SkinSetup& setup, TreeKind t
   const implicit::CompositionTree t = kind_ == TreeKind::k2013 ? implicit::build_tree_2013(sk, joints)
                                                                : implicit::build_tree_2014(sk, joints);
   tape_ = std::make_shared<implicit::Tape>(t);
+  if (setup.bulge_gate) {
+    // The bulge nodes: grid instructions that join a bone's subtree to its primitive parent's
+    // (the one skeleton edge between the two operands' leaves), the child's joint using the bulge
+    // operator: the bulge pairs at the bottom of a 2014 tree and the pairs of a 2013 tree, and a
+    // bulge joint whose bones are already paired (a chain of bulge joints: every other one).
+    // Post-order: a stack of the operands' leaf joints.
+    const auto& instr = tape_->instructions();
+    std::vector<std::vector<int>> operands;
+    for (std::size_t i = 0; i < instr.size(); ++i) {
+      if (instr[i].leaf >= 0) {
+        operands.push_back({joint_of_leaf_id_[std::size_t(tape_->leaves()[std::size_t(instr[i].leaf)].id)]});
+        continue;
+      }
+      std::vector<int> second = std::move(operands.back());
+      operands.pop_back();
+      std::vector<int>& first = operands.back();
+      if (instr[i].kind == implicit::OpKind::Grid) {
+        auto in = [](const std::vector<int>& set, int j) {
+          return std::find(set.begin(), set.end(), j) != set.end();
+        };
+        bool found = false;
+        for (const auto* sides : {&first, &second}) {
+          const std::vector<int>& other = sides == &first ? second : first;
+          for (int child : *sides) {
+            const int parent = fitted.primitive_parent(child);
+            if (parent < 0 || !in(other, parent)) continue;
+            if (setup.operator_for(r.joints[std::size_t(child)].name, kind_) == JointOperator::kBulge)
+              gates_.push_back({i, fitted.bones()[std::size_t(parent)].joint,
+                                fitted.bones()[std::size_t(child)].joint, tape_->controller(i)});
+            found = true;
+            break;
+          }
+          if (found) break;
+        }
+      }
+      first.insert(first.end(), second.begin(), second.end());
+    }
+  }
 }
 
 void SkinField::set_pose(const std::vector<Affine>& skin) {
@@ -496,6 +534,16 @@ void SkinField::set_pose(const std::vector<Affine>& skin) {
   for (std::size_t i = 0; i < joint_of_leaf_id_.size(); ++i) {
     const BonePart& b = fitted_->bones()[joint_of_leaf_id_[i]];
     tape_->set_transform_of(static_cast<int>(i), to_rigid3f(skin[b.joint] * to_affine(b.fit.local_to_world)));
+  }
+  for (const BulgeGate& g : gates_) {
+    // The bend: the rotation angle between the two joints' skinning rotations (0 at rest).
+    const Eigen::Matrix3d rel = rigid_part(skin[std::size_t(g.parent_joint)]).linear().transpose() *
+                                rigid_part(skin[std::size_t(g.child_joint)]).linear();
+    const double c = std::clamp((rel.trace() - 1.0) / 2.0, -1.0, 1.0);
+    const float cap = static_cast<float>(bulge_controller_.eval(std::acos(c)));
+    operators::ControllerTable t = g.base;
+    for (float& v : t.values) v = std::min(v, cap);
+    tape_->set_controller(g.instruction, t);
   }
 }
 

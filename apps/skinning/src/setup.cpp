@@ -142,8 +142,9 @@ SkinSetup setup_from_json(const std::string& text, const std::string& source) {
   if (j.contains("operators")) {
     const json& o = j.at("operators");
     const std::string w = source + ".operators";
-    check_keys(o, {"resolution", "slices"}, w);
+    check_keys(o, {"resolution", "slices", "bulge_gate"}, w);
     read(o, "resolution", s.operator_resolution, w);
+    read(o, "bulge_gate", s.bulge_gate, w);
     read(o, "slices", s.operator_slices, w);
     require(s.operator_resolution >= 8 && s.operator_resolution <= 1024, w + ".resolution",
             "must be in [8, 1024]", "the paper uses 128");

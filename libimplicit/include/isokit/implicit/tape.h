@@ -65,6 +65,14 @@ class Tape final : public Field {
   void set_leaf_transform(std::size_t leaf, const Rigid3f& local_to_world);
   void set_transform_of(int id, const Rigid3f& local_to_world);
 
+  /// Replaces the controller table of inner instruction `instruction` (e.g. a controller gated by
+  /// the pose); nothing is rebuilt, and a device copy of the tape made before is not updated.
+  /// Not to be called while other threads evaluate.
+  /// \throw InputError for a leaf or out-of-range instruction, or a value outside [0, 1].
+  void set_controller(std::size_t instruction, const operators::ControllerTable& table);
+  /// The controller table of inner instruction `instruction`. \throw InputError as set_controller.
+  const operators::ControllerTable& controller(std::size_t instruction) const;
+
   std::size_t size() const { return instr_.size(); }
   const std::vector<TapeInstr>& instructions() const { return instr_; }
   const std::vector<TapeLeaf>& leaves() const { return leaves_; }

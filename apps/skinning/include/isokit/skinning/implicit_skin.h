@@ -19,6 +19,7 @@
 
 #include "isokit/implicit/fit.h"
 #include "isokit/implicit/tape.h"
+#include "isokit/operators/controller.h"
 #include "isokit/skinning/rig.h"
 #include "isokit/skinning/setup.h"
 #include "isokit/track/field.h"
@@ -111,7 +112,8 @@ class SkinField {
   /// bulge) are generated once per process and resolution (2014 §4.2).
   SkinField(const FittedRig& fitted, const SkinSetup& setup, TreeKind tree, const Progress& progress = {});
 
-  /// Moves every primitive by the rigid part of its joint's skinning matrix.
+  /// Moves every primitive by the rigid part of its joint's skinning matrix, and (bulge gate,
+  /// SkinSetup::bulge_gate) caps each bulge pair's controller by its joint's bend.
   void set_pose(const std::vector<Affine>& skin);
   /// Value + gradient for the tracker. With `contacts`, `contact[k]` is set where a contact node
   /// is active (per-node diagnostics: about 2x slower); without, the contact buffer is left alone.
@@ -127,6 +129,14 @@ class SkinField {
   std::shared_ptr<implicit::Tape> tape_;
   std::vector<int> joint_of_leaf_id_;
   std::vector<std::string> joint_ops_;
+  /// A bulge node gated by the bend between its two primitives' joints.
+  struct BulgeGate {
+    std::size_t instruction;
+    int parent_joint, child_joint;  // skinning-matrix indices
+    operators::ControllerTable base;
+  };
+  std::vector<BulgeGate> gates_;
+  operators::Controller bulge_controller_ = operators::Controller::preset("bulge");
 };
 
 }  // namespace isokit::skinning

@@ -68,6 +68,13 @@ struct SkinSetup {
   implicit::PartFitOptions fit{};
   int operator_resolution{128};  ///< 2014 §6.1: 128 × 128 × 128 operator grids
   int operator_slices{128};
+  /// A `bulge` joint's controller is capped by the same controller of the joint's own bend angle
+  /// (the rotation between the two primitives relative to rest): `d = min(d_b(α), d_b(β))`. Not
+  /// in the papers: without it the bulge operator is active inside the limb at rest, where the
+  /// two primitives' caps overlap with gradients more than 90° apart, and skin that slides into
+  /// that internal valley during a bend stays there (docs/skinning.md, "Decision: the bulge
+  /// gate"). Setup key `operators.bulge_gate`.
+  bool bulge_gate{true};
   track::TrackerOptions tracker{};
   track::ProjectorOptions projector{};
   SubstepOptions substeps{};
