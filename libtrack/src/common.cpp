@@ -194,14 +194,17 @@ int fold_repair(const FieldFunction& field, const Triangles& triangles, const Ad
                 const Adjacency& vertex_faces, const std::vector<std::uint8_t>& rest_inverted,
                 const std::vector<std::uint8_t>& lost, const std::vector<std::uint8_t>& movable,
                 const FoldRepairOptions& options, std::size_t grain, std::vector<Vec3f>& pts,
-                std::vector<float>& beta, std::vector<std::uint8_t>& touched) {
+                std::vector<float>& beta, std::vector<std::uint8_t>& touched,
+                std::vector<std::uint8_t>& inverted, std::vector<std::uint8_t>& fresh) {
   const std::size_t n = pts.size(), nf = static_cast<std::size_t>(triangles.rows());
   std::vector<std::uint8_t> tested(nf, 0), in(n, 0), moved(n, 0);
+  fresh.assign(nf, 0);
   std::vector<int> candidates, region;
   // The triangles the contact smoothing may have changed: those around a vertex with β > 0.
   auto add_faces_of = [&](int i) {
     for (int k = vertex_faces.offsets[i]; k < vertex_faces.offsets[i + 1]; ++k) {
       const int f = vertex_faces.neighbors[k];
+      fresh[f] = 0;
       if (!tested[f]) tested[f] = 1, candidates.push_back(f);
     }
   };
@@ -212,11 +215,14 @@ int fold_repair(const FieldFunction& field, const Triangles& triangles, const Ad
   int count = 0;
   for (int round = 0; round < options.rounds && !candidates.empty(); ++round) {
     std::sort(candidates.begin(), candidates.end());
-    const std::vector<std::uint8_t> inverted = inverted_triangles(field, pts, triangles, grain, &candidates);
+    const std::vector<std::uint8_t> now = inverted_triangles(field, pts, triangles, grain, &candidates);
     region.clear();
     for (int f : candidates) {
-      tested[static_cast<std::size_t>(f)] = 0;
-      if (!inverted[static_cast<std::size_t>(f)] || (!rest_inverted.empty() && rest_inverted[f])) continue;
+      const auto t = static_cast<std::size_t>(f);
+      tested[t] = 0;
+      inverted[t] = now[t];
+      fresh[t] = 1;
+      if (!now[t] || (!rest_inverted.empty() && rest_inverted[f])) continue;
       for (int k = 0; k < 3; ++k) {
         const int v = triangles(f, k);
         if (!in[v]) in[v] = 1, region.push_back(v);
@@ -335,7 +341,8 @@ void final_stats_touched(const FieldFunction& field, const std::vector<Vec3f>& p
                          const Triangles& triangles, const Adjacency& vertex_faces,
                          const std::vector<float>& iso, std::vector<float>& values,
                          const std::vector<std::uint8_t>& touched, std::size_t grain, VertexFlags& flags,
-                         TrackStats& stats, std::vector<std::uint8_t>& inverted) {
+                         TrackStats& stats, std::vector<std::uint8_t>& inverted,
+                         const std::vector<std::uint8_t>* fresh) {
   const std::size_t n = pts.size();
   // Vertices to evaluate again, and triangles around smoothed vertices to test again.
   std::vector<int> redo;
@@ -343,8 +350,10 @@ void final_stats_touched(const FieldFunction& field, const std::vector<Vec3f>& p
   for (std::size_t i = 0; i < n; ++i) {
     if (touched[i]) redo.push_back(static_cast<int>(i));
     if (flags.beta[i] > 0.f)
-      for (int k = vertex_faces.offsets[i]; k < vertex_faces.offsets[i + 1]; ++k)
-        tri_redo[vertex_faces.neighbors[k]] = 1;
+      for (int k = vertex_faces.offsets[i]; k < vertex_faces.offsets[i + 1]; ++k) {
+        const int f = vertex_faces.neighbors[k];
+        if (!fresh || fresh->empty() || !(*fresh)[static_cast<std::size_t>(f)]) tri_redo[f] = 1;
+      }
   }
   refresh_values(field, pts, redo, grain, values, flags);
   std::vector<int> tris;

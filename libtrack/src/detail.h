@@ -54,12 +54,16 @@ int contact_smoothing(const Adjacency& adj, const std::vector<std::uint8_t>& con
 /// grown by `rings` rings, take `steps` double-buffered Laplacian steps and get β = 1 and
 /// `touched`; the triangles around them are tested again, up to `rounds` rounds. `lost` vertices,
 /// and those with `movable[i] == 0` (when `movable` is not empty), stay where they are. Nothing is done when
-/// the first round's vertices exceed `max_fraction` of the mesh. Returns the number of vertices moved.
+/// the first round's vertices exceed `max_fraction` of the mesh. Every triangle it tests gets its
+/// flag in `inverted` and `fresh[f] = 1` (`fresh` is resized to the triangles), reset to 0 when
+/// one of its vertices moves afterwards: the final statistics need not test the fresh ones again.
+/// Returns the number of vertices moved.
 int fold_repair(const FieldFunction& field, const Triangles& triangles, const Adjacency& adj,
                 const Adjacency& vertex_faces, const std::vector<std::uint8_t>& rest_inverted,
                 const std::vector<std::uint8_t>& lost, const std::vector<std::uint8_t>& movable,
                 const FoldRepairOptions& options, std::size_t grain, std::vector<Vec3f>& pts,
-                std::vector<float>& beta, std::vector<std::uint8_t>& touched);
+                std::vector<float>& beta, std::vector<std::uint8_t>& touched,
+                std::vector<std::uint8_t>& inverted, std::vector<std::uint8_t>& fresh);
 
 /// Orientation repair (TrackerOptions::orientation_repair): moves single vertices of the triangles
 /// flagged in `inverted` (and not `rest_inverted`) so that fewer of their triangles are inverted,
@@ -104,12 +108,14 @@ void refresh_values(const FieldFunction& field, const std::vector<Vec3f>& pts, c
 /// evaluation; the vertices marked `touched` (moved after the first evaluation, or smoothed) are
 /// evaluated again at `pts`, the others keep that value (they moved by less than the tolerance
 /// since). `inverted` holds the flags of the positions before the contact smoothing; the
-/// triangles around a smoothed vertex (β > 0) are tested again, so the count is exact.
+/// triangles around a smoothed vertex (β > 0) are tested again, so the count is exact — except
+/// those marked in `fresh` (tested at these very positions by the fold repair).
 void final_stats_touched(const FieldFunction& field, const std::vector<Vec3f>& pts,
                          const Triangles& triangles, const Adjacency& vertex_faces,
                          const std::vector<float>& iso, std::vector<float>& values,
                          const std::vector<std::uint8_t>& touched, std::size_t grain, VertexFlags& flags,
-                         TrackStats& stats, std::vector<std::uint8_t>& inverted);
+                         TrackStats& stats, std::vector<std::uint8_t>& inverted,
+                         const std::vector<std::uint8_t>* fresh = nullptr);
 
 /// Calls the field over [0, n) in parallel chunks (each chunk one call).
 void eval_field(const FieldFunction& field, const Vec3f* pts, std::size_t n, float* values, Vec3f* grads,

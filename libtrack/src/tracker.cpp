@@ -662,14 +662,15 @@ TrackStats IsoSurfaceTracker::track(const FieldFunction& field, const std::vecto
   if (options_.smoothing.smoothing_steps > 0)
     for (std::size_t i = 0; i < n; ++i)
       if (flags_.beta[i] > 0.f) touched[i] = 1;
+  std::vector<std::uint8_t> fresh;  // triangles the fold repair tested at the final positions
   if (options_.fold_repair.rounds > 0 && options_.fold_repair.steps > 0) {
     detail::fold_repair(field, triangles_, adj_, vertex_faces_, rest_inverted_, flags_.lost, repair_mask_,
-                        options_.fold_repair, options_.grain, cur, flags_.beta, touched);
+                        options_.fold_repair, options_.grain, cur, flags_.beta, touched, inverted, fresh);
     stats.smoothed_vertices = 0;
     for (std::size_t i = 0; i < n; ++i) stats.smoothed_vertices += flags_.beta[i] > 0.f ? 1 : 0;
   }
   detail::final_stats_touched(field, cur, triangles_, vertex_faces_, iso_, values, touched, options_.grain,
-                              flags_, stats, inverted);
+                              flags_, stats, inverted, &fresh);
   if (options_.orientation_repair.rounds > 0 && stats.inverted_triangles > 0) {
     std::vector<std::uint8_t> pinned(flags_.lost);
     if (!repair_mask_.empty())
