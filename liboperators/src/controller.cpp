@@ -32,7 +32,7 @@ Controller::Controller(std::vector<ControllerKnot> knots, std::string name)
 
 Controller Controller::preset(const std::string& name) {
   if (name == "contact") return Controller({{0, 0}, {kPi / 2, 0}, {kPi, 1}}, name);
-  if (name == "bulge") return Controller({{0, 0}, {kPi / 2, 1}, {kPi, 1}}, name);
+  if (name == "bulge") return Controller({{0, 0}, {kPi, 1}}, name);
   if (name == "blend2013") return Controller({{0, 0}, {kPi / 4, 1}, {kPi / 2, 0}, {kPi, 0}}, name);
   if (name == "bulge2013") return Controller({{0, 0}, {kPi / 2, 1}, {kPi, 1}}, name);
   if (name == "constant0") return Controller({{0, 0}, {kPi, 0}}, name);

@@ -20,7 +20,11 @@ TEST_CASE("controller presets follow the papers' shapes", "[operators][controlle
   const Controller db = Controller::preset("bulge");
   CHECK(db.eval(0) == 0.0);
   CHECK(db.eval(0.3) > 0.0);  // the bulge starts at low angles (2014 Fig. 4b)
-  for (double a = kPi / 2; a <= kPi; a += 0.01) CHECK(db.eval(a) == Approx(1.0));
+  CHECK(db.eval(kPi / 2) == Approx(0.5));
+  CHECK(db.eval(kPi) == 1.0);
+  for (double a = 0.01; a <= kPi; a += 0.01) CHECK(db.eval(a) > db.eval(a - 0.01));  // rises all the way
+  const Controller db13 = Controller::preset("bulge2013");
+  for (double a = kPi / 2; a <= kPi; a += 0.01) CHECK(db13.eval(a) == Approx(1.0));
   const Controller b13 = Controller::preset("blend2013");
   CHECK(b13.eval(0) == 0.0);
   CHECK(b13.eval(kPi / 4) == Approx(1.0));

@@ -242,13 +242,15 @@ TEST_CASE("e2e: full-body crouch on the 13k humanoid: no intersections, no captu
   CHECK(trk.rest_recovery <= 1e-3);
 }
 
-// A `bulge` joint without the gate: inside the finger at rest the two phalanges' caps overlap
-// with gradients more than 90° apart, the bulge controller is 1 there and the operator's contact
-// line makes a valley inside the limb; skin that slides into it during the bend stays (rest
-// recovery 9.8e-2 on 2026-12-01). The gate caps the controller by the joint's bend.
+// A `bulge` joint without the gate, with the controller at 1 from 90° (`bulge2013`, the bulge
+// preset before 2026-12-01): inside the finger at rest the two phalanges' caps overlap with
+// gradients more than 90° apart, the controller is 1 there and the operator's contact line makes
+// a valley inside the limb; skin that slides into it during the bend stays (rest recovery 9.8e-2
+// on 2026-12-01). The gate caps the controller by the joint's bend.
 TEST_CASE("e2e: a bulge joint returns to rest with the bulge gate", "[skinning][e2e][slow]") {
   SkinSetup on = fast_setup();
   on.joints["Finger2"].op = JointOperator::kBulge;
+  on.bulge_controller = "bulge2013";
   SkinSetup off = on;
   off.bulge_gate = false;
   Skinner gated(make_finger(), on), plain(make_finger(), off);
@@ -296,7 +298,29 @@ TEST_CASE("e2e: the bulge gate finds every bulge joint, chained ones too, in bot
       CHECK(closed() == (gate ? 3 : 0));
       const auto bent = bend_animation(sk.rig(), {parse_bend("Finger2:x:90", sk.rig())}, 3)[1];
       field.set_pose(skinning_matrices(sk.rig(), bent));
-      CHECK(closed() == (gate ? 2 : 0));  // Finger2's node opens (d_b(90°) = 1), the others stay shut
+      CHECK(closed() == (gate ? 2 : 0));  // Finger2's node opens (d_b(90°) = 0.5), the others stay shut
     }
   }
+}
+
+// The bulge controller rising over [0, π] (docs/operators.md, "Decision: the bulge controller"):
+// the bulge operator folds like the contact operator. With the controller at 1 from 90° the
+// built-in cylinder at 150° had 158 self-intersecting pairs (2026-12-01).
+TEST_CASE("e2e: the built-in cylinder folds to 150 degrees with the bulge operator",
+          "[skinning][e2e][slow]") {
+  SkinSetup setup = fast_setup();
+  setup.joints["Bone1"].op = JointOperator::kBulge;
+  SkinSetup early = setup;
+  early.bulge_controller = "bulge2013";
+  Skinner sk(make_cylinder(), setup), old(make_cylinder(), early);
+  const auto poses = bend_animation(sk.rig(), {parse_bend("Bone1:z:150", sk.rig())}, 31);
+  const BakeResult trk = sk.bake(Method::kTracking2014, poses),
+                   before = old.bake(Method::kTracking2014, poses);
+  INFO("bulge: " << trk.worst.self_intersections << " pairs, " << trk.worst.new_inverted_triangles
+                 << " inverted, rest " << trk.rest_recovery
+                 << "; controller at 1 from 90 degrees: " << before.worst.self_intersections << " pairs");
+  CHECK(before.worst.self_intersections > 0);
+  CHECK(trk.worst.self_intersections == 0);
+  CHECK(trk.worst.new_inverted_triangles <= 5);
+  CHECK(trk.rest_recovery <= 1e-3);
 }

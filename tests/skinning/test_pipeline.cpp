@@ -255,6 +255,12 @@ TEST_CASE("pipeline: bad input to the skinner is rejected naming the item", "[sk
   CHECK_FALSE(setup_from_json(R"({"operators": {"bulge_gate": false}})", "s.json").bulge_gate);
   CHECK_THROWS_WITH(setup_from_json(R"({"operators": {"bulge_gate": 3}})", "s.json"),
                     Catch::Contains("s.json.operators.bulge_gate"));
+  CHECK(s.bulge_controller == "bulge");
+  CHECK(s.contact_controller == "contact");
+  CHECK(setup_from_json(R"({"operators": {"bulge_controller": "bulge2013"}})", "s.json").bulge_controller ==
+        "bulge2013");
+  CHECK_THROWS_WITH(setup_from_json(R"({"operators": {"contact_controller": "soft"}})", "s.json"),
+                    Catch::Contains("s.json.operators.contact_controller") && Catch::Contains("bulge2013"));
   const SkinSetup orient = setup_from_json(
       R"({"tracker": {"orientation_repair_rounds": 2, "orientation_repair_max_move": 0.25,
                        "orientation_repair_max_outward_move": 0}})",

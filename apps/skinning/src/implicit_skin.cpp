@@ -463,14 +463,14 @@ SkinField::SkinField(const FittedRig& fitted, const SkinSetup& setup, TreeKind t
       case JointOperator::kBulge:
         js.op = implicit::NodeOperator::grid_operator(
             cached_operator("bulge", setup.operator_resolution, setup.operator_slices, progress),
-            operators::Controller::preset("bulge"), "bulge");
+            operators::Controller::preset(setup.bulge_controller), "bulge");
         js.bulge_pair = kind_ == TreeKind::k2014;
         break;
       case JointOperator::kContact:
       case JointOperator::kAuto:
         js.op = implicit::NodeOperator::grid_operator(
             cached_operator("contact", setup.operator_resolution, setup.operator_slices, progress),
-            operators::Controller::preset("contact"), "contact");
+            operators::Controller::preset(setup.contact_controller), "contact");
         break;
     }
     joints.push_back(js);
@@ -487,6 +487,7 @@ SkinField::SkinField(const FittedRig& fitted, const SkinSetup& setup, TreeKind t
   const implicit::CompositionTree t = kind_ == TreeKind::k2013 ? implicit::build_tree_2013(sk, joints)
                                                                : implicit::build_tree_2014(sk, joints);
   tape_ = std::make_shared<implicit::Tape>(t);
+  bulge_controller_ = operators::Controller::preset(setup.bulge_controller);
   if (setup.bulge_gate) {
     // The bulge nodes: grid instructions that join a bone's subtree to its primitive parent's
     // (the one skeleton edge between the two operands' leaves), the child's joint using the bulge

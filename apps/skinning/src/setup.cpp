@@ -1,12 +1,14 @@
 // SPDX-License-Identifier: MIT
 #include "isokit/skinning/setup.h"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "isokit/core/error.h"
+#include "isokit/operators/controller.h"
 
 namespace isokit::skinning {
 
@@ -142,9 +144,20 @@ SkinSetup setup_from_json(const std::string& text, const std::string& source) {
   if (j.contains("operators")) {
     const json& o = j.at("operators");
     const std::string w = source + ".operators";
-    check_keys(o, {"resolution", "slices", "bulge_gate"}, w);
+    check_keys(o, {"resolution", "slices", "bulge_gate", "contact_controller", "bulge_controller"}, w);
     read(o, "resolution", s.operator_resolution, w);
     read(o, "bulge_gate", s.bulge_gate, w);
+    read(o, "contact_controller", s.contact_controller, w);
+    read(o, "bulge_controller", s.bulge_controller, w);
+    for (const auto& [key, name] :
+         {std::pair<std::string, std::string>{"contact_controller", s.contact_controller},
+          {"bulge_controller", s.bulge_controller}}) {
+      const auto names = operators::Controller::preset_names();
+      std::string list;
+      for (const auto& n : names) list += (list.empty() ? "" : ", ") + n;
+      require(std::find(names.begin(), names.end(), name) != names.end(), w + "." + key,
+              "unknown controller '" + name + "'", "use one of " + list);
+    }
     read(o, "slices", s.operator_slices, w);
     require(s.operator_resolution >= 8 && s.operator_resolution <= 1024, w + ".resolution",
             "must be in [8, 1024]", "the paper uses 128");

@@ -136,7 +136,7 @@ class SkinField {
     operators::ControllerTable base;
   };
   std::vector<BulgeGate> gates_;
-  operators::Controller bulge_controller_ = operators::Controller::preset("bulge");
+  operators::Controller bulge_controller_ = operators::Controller::preset("bulge");  ///< the gate's d_b
 };
 
 }  // namespace isokit::skinning

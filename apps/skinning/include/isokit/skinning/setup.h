@@ -75,6 +75,11 @@ struct SkinSetup {
   /// that internal valley during a bend stays there (docs/skinning.md, "Decision: the bulge
   /// gate"). Setup key `operators.bulge_gate`.
   bool bulge_gate{true};
+  /// Controller presets (operators::Controller::preset) of the contact and bulge operators; setup
+  /// keys `operators.contact_controller`, `operators.bulge_controller` ("bulge2013" = the bulge
+  /// controller before 2026-12-01, at 1 from 90°: docs/operators.md).
+  std::string contact_controller{"contact"};
+  std::string bulge_controller{"bulge"};
   track::TrackerOptions tracker{};
   track::ProjectorOptions projector{};
   SubstepOptions substeps{};
