@@ -67,13 +67,14 @@ int fold_repair(const FieldFunction& field, const Triangles& triangles, const Ad
 
 /// Orientation repair (TrackerOptions::orientation_repair): moves single vertices of the triangles
 /// flagged in `inverted` (and not `rest_inverted`) so that fewer of their triangles are inverted,
-/// never to a position where one of its triangles crosses another triangle; `pinned` vertices
-/// (when not empty) stay. Updates `inverted` for the triangles around the moved vertices and
-/// returns the moved vertices (sorted).
+/// never to a position where one of its triangles crosses another triangle; `lost` vertices and
+/// those with `movable[i] == 0` (when `movable` is not empty) stay. Updates `inverted` for the
+/// triangles around the moved vertices and returns the moved vertices (sorted).
 std::vector<int> orientation_repair(const FieldFunction& field, const Triangles& triangles,
                                     const Adjacency& vertex_faces,
                                     const std::vector<std::uint8_t>& rest_inverted,
-                                    const std::vector<std::uint8_t>& pinned,
+                                    const std::vector<std::uint8_t>& lost,
+                                    const std::vector<std::uint8_t>& movable,
                                     const OrientationRepairOptions& options, std::vector<Vec3f>& pts,
                                     std::vector<std::uint8_t>& inverted);
 

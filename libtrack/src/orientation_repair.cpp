@@ -142,12 +142,8 @@ class TriangleHash {
   // more than 4096 cells.
   template <class F>
   bool for_cells(int f, F&& visit) const {
-    Vec3f lo = pts_[tris_(f, 0)], hi = lo;
-    for (int k = 1; k < 3; ++k) {
-      const Vec3f p = pts_[tris_(f, k)];
-      lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
-      hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
-    }
+    const Box3f b = face_box(pts_, tris_, f);
+    const Vec3f lo = b.lo, hi = b.hi;
     const double span = (std::floor(double(hi.x) * inv_cell_) - std::floor(double(lo.x) * inv_cell_) + 1) *
                         (std::floor(double(hi.y) * inv_cell_) - std::floor(double(lo.y) * inv_cell_) + 1) *
                         (std::floor(double(hi.z) * inv_cell_) - std::floor(double(lo.z) * inv_cell_) + 1);
@@ -179,7 +175,8 @@ class TriangleHash {
 std::vector<int> orientation_repair(const FieldFunction& field, const Triangles& triangles,
                                     const Adjacency& vertex_faces,
                                     const std::vector<std::uint8_t>& rest_inverted,
-                                    const std::vector<std::uint8_t>& pinned,
+                                    const std::vector<std::uint8_t>& lost,
+                                    const std::vector<std::uint8_t>& movable,
                                     const OrientationRepairOptions& options, std::vector<Vec3f>& pts,
                                     std::vector<std::uint8_t>& inverted) {
   const std::size_t n = pts.size(), nf = inverted.size();
@@ -250,7 +247,7 @@ std::vector<int> orientation_repair(const FieldFunction& field, const Triangles&
     field(vp.data(), vp.size(), vv.data(), vg.data(), vc.data());
     for (std::size_t a = 0; a < verts.size(); ++a) {
       const int v = verts[a];
-      if ((!pinned.empty() && pinned[v]) || stuck[v]) continue;
+      if (lost[v] || (!movable.empty() && !movable[v]) || stuck[v]) continue;
       const int fb = vertex_faces.offsets[v], fe = vertex_faces.offsets[v + 1], deg = fe - fb;
       if (deg == 0) continue;
       // Directions: the vertex normal, the field's inward direction at the vertex, and the normals

@@ -672,11 +672,9 @@ TrackStats IsoSurfaceTracker::track(const FieldFunction& field, const std::vecto
   detail::final_stats_touched(field, cur, triangles_, vertex_faces_, iso_, values, touched, options_.grain,
                               flags_, stats, inverted, &fresh);
   if (options_.orientation_repair.rounds > 0 && stats.inverted_triangles > 0) {
-    std::vector<std::uint8_t> pinned(flags_.lost);
-    if (!repair_mask_.empty())
-      for (std::size_t i = 0; i < n; ++i) pinned[i] |= repair_mask_[i] ? 0 : 1;
-    const std::vector<int> oriented = detail::orientation_repair(
-        field, triangles_, vertex_faces_, rest_inverted_, pinned, options_.orientation_repair, cur, inverted);
+    const std::vector<int> oriented =
+        detail::orientation_repair(field, triangles_, vertex_faces_, rest_inverted_, flags_.lost,
+                                   repair_mask_, options_.orientation_repair, cur, inverted);
     stats.oriented_vertices = static_cast<int>(oriented.size());
     if (!oriented.empty()) {
       // Moved off their iso-values on purpose, like smoothed vertices: β = 1, out of the residual.
