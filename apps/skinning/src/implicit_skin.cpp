@@ -434,7 +434,9 @@ std::shared_ptr<const operators::GridOperator> cached_operator(const std::string
 }  // namespace
 
 SkinField::SkinField(const FittedRig& fitted, const SkinSetup& setup, TreeKind tree, const Progress& progress)
-    : fitted_(&fitted), kind_(tree == TreeKind::kAuto ? TreeKind::k2014 : tree) {
+    : fitted_(&fitted),
+      kind_(tree == TreeKind::kAuto ? TreeKind::k2014 : tree),
+      bulge_controller_(operators::Controller::preset(setup.bulge_controller)) {
   const Rig& r = fitted.rig();
   const int nj = static_cast<int>(r.joints.size());
   // Compressed skeleton over fitted joints.
@@ -487,7 +489,6 @@ SkinField::SkinField(const FittedRig& fitted, const SkinSetup& setup, TreeKind t
   const implicit::CompositionTree t = kind_ == TreeKind::k2013 ? implicit::build_tree_2013(sk, joints)
                                                                : implicit::build_tree_2014(sk, joints);
   tape_ = std::make_shared<implicit::Tape>(t);
-  bulge_controller_ = operators::Controller::preset(setup.bulge_controller);
   if (setup.bulge_gate) {
     // The bulge nodes: grid instructions that join a bone's subtree to its primitive parent's
     // (the one skeleton edge between the two operands' leaves), the child's joint using the bulge

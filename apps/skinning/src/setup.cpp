@@ -149,15 +149,14 @@ SkinSetup setup_from_json(const std::string& text, const std::string& source) {
     read(o, "bulge_gate", s.bulge_gate, w);
     read(o, "contact_controller", s.contact_controller, w);
     read(o, "bulge_controller", s.bulge_controller, w);
+    const std::vector<std::string> presets = operators::Controller::preset_names();
+    std::string list;
+    for (const auto& n : presets) list += (list.empty() ? "" : ", ") + n;
     for (const auto& [key, name] :
          {std::pair<std::string, std::string>{"contact_controller", s.contact_controller},
-          {"bulge_controller", s.bulge_controller}}) {
-      const auto names = operators::Controller::preset_names();
-      std::string list;
-      for (const auto& n : names) list += (list.empty() ? "" : ", ") + n;
-      require(std::find(names.begin(), names.end(), name) != names.end(), w + "." + key,
+          {"bulge_controller", s.bulge_controller}})
+      require(std::find(presets.begin(), presets.end(), name) != presets.end(), w + "." + key,
               "unknown controller '" + name + "'", "use one of " + list);
-    }
     read(o, "slices", s.operator_slices, w);
     require(s.operator_resolution >= 8 && s.operator_resolution <= 1024, w + ".resolution",
             "must be in [8, 1024]", "the paper uses 128");

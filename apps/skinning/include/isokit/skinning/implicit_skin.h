@@ -136,7 +136,7 @@ class SkinField {
     operators::ControllerTable base;
   };
   std::vector<BulgeGate> gates_;
-  operators::Controller bulge_controller_ = operators::Controller::preset("bulge");  ///< the gate's d_b
+  operators::Controller bulge_controller_;  ///< the gate's d_b (SkinSetup::bulge_controller)
 };
 
 }  // namespace isokit::skinning
