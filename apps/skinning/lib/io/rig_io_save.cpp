@@ -8,7 +8,7 @@
 #include <ostream>
 #include <set>
 
-#include "gltf_io.h"
+#include "io/gltf_io.h"
 #include "isokit/core/error.h"
 #include "isokit/skinning/rig_io.h"
 

@@ -17,7 +17,7 @@
 #include <utility>
 
 #include "isokit/core/error.h"
-#include "polygonize.h"
+#include "rig/polygonize.h"
 
 namespace isokit::skinning::detail {
 namespace {

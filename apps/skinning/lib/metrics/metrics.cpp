@@ -7,7 +7,7 @@
 #include <cstdint>
 #include <utility>
 
-#include "metrics_check.h"
+#include "metrics/metrics_check.h"
 
 namespace isokit::skinning {
 namespace {

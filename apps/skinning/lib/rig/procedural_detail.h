@@ -9,7 +9,7 @@
 
 #include "isokit/skinning/rig.h"
 #include "isokit/skinning/weights.h"
-#include "polygonize.h"
+#include "rig/polygonize.h"
 
 namespace isokit::skinning::detail {
 

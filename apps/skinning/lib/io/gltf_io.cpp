@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-#include "gltf_io.h"
+#include "io/gltf_io.h"
 
 #include <algorithm>
 #include <atomic>

@@ -21,6 +21,25 @@ Affine rigid_part(const Affine& a) {
   return r;
 }
 
+Rigid3f to_rigid3f(const Affine& a) {
+  const Affine r = rigid_part(a);
+  Rigid3f x;
+  for (int i = 0; i < 3; ++i) {
+    for (int c = 0; c < 3; ++c) x.R.m[i * 3 + c] = static_cast<float>(r.linear()(i, c));
+  }
+  x.t = {static_cast<float>(r.translation().x()), static_cast<float>(r.translation().y()),
+         static_cast<float>(r.translation().z())};
+  return x;
+}
+
+Affine to_affine(const Rigid3d& x) {
+  Affine a = Affine::Identity();
+  for (int i = 0; i < 3; ++i)
+    for (int c = 0; c < 3; ++c) a.linear()(i, c) = x.R.m[i * 3 + c];
+  a.translation() = Eigen::Vector3d(x.t.x, x.t.y, x.t.z);
+  return a;
+}
+
 double rotation_angle(const Affine& a) {
   const Eigen::AngleAxisd aa(Eigen::Matrix3d(rigid_part(a).linear()));
   return std::abs(aa.angle());

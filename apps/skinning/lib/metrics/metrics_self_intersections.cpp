@@ -13,7 +13,7 @@
 #include "isokit/core/error.h"
 #include "isokit/core/parallel.h"
 #include "isokit/skinning/metrics.h"
-#include "metrics_check.h"
+#include "metrics/metrics_check.h"
 
 namespace isokit::skinning {
 namespace {

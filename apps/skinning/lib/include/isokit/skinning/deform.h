@@ -17,6 +17,10 @@ namespace isokit::skinning {
 /// The rigid part of an affine matrix: the rotation of its polar decomposition (SVD, det +1)
 /// and its translation.
 Affine rigid_part(const Affine& a);
+/// `rigid_part(a)` as the float rigid transform the implicit fields take.
+Rigid3f to_rigid3f(const Affine& a);
+/// A rigid transform of libimplicit as an affine matrix.
+Affine to_affine(const Rigid3d& x);
 
 /// `out[v] = Σ w_vj M_j rest[v]`. `out` is resized. \throw InputError for size mismatches.
 void linear_blend(const SkinWeights& weights, const std::vector<Affine>& skin, const track::Positions& rest,

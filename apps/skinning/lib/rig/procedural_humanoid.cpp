@@ -10,8 +10,8 @@
 
 #include "isokit/core/error.h"
 #include "isokit/skinning/procedural.h"
-#include "polygonize.h"
-#include "procedural_detail.h"
+#include "rig/polygonize.h"
+#include "rig/procedural_detail.h"
 
 namespace isokit::skinning {
 namespace {

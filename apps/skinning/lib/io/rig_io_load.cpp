@@ -19,7 +19,7 @@
 #include <assimp/scene.h>
 #include <assimp/Importer.hpp>
 
-#include "gltf_io.h"
+#include "io/gltf_io.h"
 #include "isokit/core/error.h"
 #include "isokit/skinning/rig_io.h"
 

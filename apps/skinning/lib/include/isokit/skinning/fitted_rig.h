@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: MIT
 /// \file
-/// The implicit skin of a rig (2013 §4, 2014 §4): the mesh partitioned by dominant joint, one
-/// HRBF primitive fitted per joint with vertices (bone-local frame, 32³ grid), and a composition
-/// tree (2013 or 2014 builder) whose leaves follow the joints' rigid motion.
+/// The fitted parts of a rig (2013 §4.1): the mesh partitioned by dominant joint and one HRBF
+/// primitive fitted per joint with vertices (bone-local frame, 32³ grid). The composed field
+/// built on them is in skin_field.h.
 ///
 /// Bone segments (the fit's culling planes and closure points, see docs/skinning.md):
 /// - a joint with exactly one child joint: from the joint to the child, closure points at both
@@ -18,11 +18,9 @@
 #include <vector>
 
 #include "isokit/implicit/fit.h"
-#include "isokit/implicit/tape.h"
-#include "isokit/operators/controller.h"
 #include "isokit/skinning/rig.h"
 #include "isokit/skinning/setup.h"
-#include "isokit/track/field.h"
+#include "isokit/track/mesh.h"
 
 namespace isokit::skinning {
 
@@ -103,40 +101,5 @@ class AxisGuard {
 /// joint most of their boundary neighbours belong to (repeated until stable).
 std::vector<int> clean_partition(const std::vector<int>& labels, const track::Triangles& triangles,
                                  int num_vertices);
-
-/// The composed field of a fitted rig for one tree kind, posed by skinning matrices.
-class SkinField {
- public:
-  /// Builds the tree: joints without a primitive are skipped (their children attach to the
-  /// nearest ancestor with one; several roots hang under the first). Grid operators (contact,
-  /// bulge) are generated once per process and resolution (2014 §4.2).
-  SkinField(const FittedRig& fitted, const SkinSetup& setup, TreeKind tree, const Progress& progress = {});
-
-  /// Moves every primitive by the rigid part of its joint's skinning matrix, and (bulge gate,
-  /// SkinSetup::bulge_gate) caps each bulge pair's controller by its joint's bend.
-  void set_pose(const std::vector<Affine>& skin);
-  /// Value + gradient for the tracker. With `contacts`, `contact[k]` is set where a contact node
-  /// is active (per-node diagnostics: about 2x slower); without, the contact buffer is left alone.
-  track::FieldFunction function(bool contacts = false) const;
-  const implicit::Tape& tape() const { return *tape_; }
-  TreeKind kind() const { return kind_; }
-  /// Per-instruction operator names (for reports).
-  std::vector<std::string> joint_operators() const { return joint_ops_; }
-
- private:
-  const FittedRig* fitted_;
-  TreeKind kind_;
-  std::shared_ptr<implicit::Tape> tape_;
-  std::vector<int> joint_of_leaf_id_;
-  std::vector<std::string> joint_ops_;
-  /// A bulge node gated by the bend between its two primitives' joints.
-  struct BulgeGate {
-    std::size_t instruction;
-    int parent_joint, child_joint;  // skinning-matrix indices
-    operators::ControllerTable base;
-  };
-  std::vector<BulgeGate> gates_;
-  operators::Controller bulge_controller_;  ///< the gate's d_b (SkinSetup::bulge_controller)
-};
 
 }  // namespace isokit::skinning

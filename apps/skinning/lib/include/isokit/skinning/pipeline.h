@@ -17,7 +17,7 @@
 #include <vector>
 
 #include "isokit/skinning/animation.h"
-#include "isokit/skinning/implicit_skin.h"
+#include "isokit/skinning/skin_field.h"
 #include "isokit/skinning/metrics.h"
 #include "isokit/skinning/rig.h"
 #include "isokit/skinning/setup.h"
