@@ -8,6 +8,7 @@
 #include <limits>
 
 #include "isokit/core/error.h"
+#include "isokit/core/math.h"
 #include "isokit/implicit/fit.h"
 #include "test_util.h"
 
@@ -16,7 +17,6 @@ using namespace isokit::implicit;
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 /// Surface of revolution around the segment `a`–`b`: rings at parameters along a profile
 /// `(axial offset, radius)`; `cap0` / `cap1` add pole vertices closing the ends.

@@ -4,13 +4,13 @@
 #include <cmath>
 
 #include "isokit/core/error.h"
+#include "isokit/core/math.h"
 #include "isokit/operators/controller.h"
 
 using namespace isokit;
 using operators::Controller;
 
 namespace {
-constexpr double kPi = 3.14159265358979323846;
 }
 
 TEST_CASE("controller presets follow the papers' shapes", "[operators][controller]") {

@@ -6,7 +6,7 @@
 
 namespace isokit::skinning::testing {
 
-inline constexpr double kPi = 3.14159265358979323846;
+using isokit::kPi;
 
 struct Mesh {
   track::Positions v;

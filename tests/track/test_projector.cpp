@@ -16,7 +16,6 @@ using isokit::test::capsule_mesh;
 
 namespace {
 
-constexpr float kPi = 3.14159265358979f;
 
 /// Synthetic field for the contact rule: f = 0.5 - 0.1 z (iso 0.5 at z = 0), whose reported
 /// gradient direction is turned by `turn` radians about y below z = 0.5.
@@ -46,7 +45,7 @@ TEST_CASE("projector 2013: contact stop triggers at the stated angle", "[track][
   for (const float deg : {50.f, 54.f, 56.f, 70.f}) {
     Projector2013 proj(rest.V, rest.F, turning_field(0.f));
     Positions P = single_triangle(1.f).V;
-    const TrackStats s = proj.project(turning_field(deg * kPi / 180.f), P);
+    const TrackStats s = proj.project(turning_field(deg * kPiF / 180.f), P);
     INFO("turn " << deg);
     const bool stopped = deg > 55.f;
     CHECK(s.contact_vertices == (stopped ? 3 : 0));
@@ -62,9 +61,9 @@ TEST_CASE("projector 2013: contact stop triggers at the stated angle", "[track][
   o.smoothing.smoothing_steps = 0;
   IsoSurfaceTracker t(rest.V, rest.F, std::vector<float>(3, 0.5f), o);
   Positions P = single_triangle(1.f).V;
-  CHECK(t.track(turning_field(60.f * kPi / 180.f), {}, P).contact_vertices == 3);
+  CHECK(t.track(turning_field(60.f * kPiF / 180.f), {}, P).contact_vertices == 3);
   P = single_triangle(1.f).V;
-  CHECK(t.track(turning_field(50.f * kPi / 180.f), {}, P).contact_vertices == 0);
+  CHECK(t.track(turning_field(50.f * kPiF / 180.f), {}, P).contact_vertices == 0);
 }
 
 TEST_CASE("projector 2013: MVC relaxation leaves the rest pose unchanged", "[track][projector]") {
@@ -103,7 +102,7 @@ TEST_CASE("projector 2013: elbow poses are projected onto their iso-values", "[t
   test::ElbowField field(0.3f, 1.0f, 48);
   Projector2013 proj(m.V, m.F, field.function());
   for (const float deg : {45.f, 90.f}) {
-    const float a = deg * kPi / 180.f;
+    const float a = deg * kPiF / 180.f;
     field.set_angle(a);
     // Initial pose: smooth skinning about the joint (rotation by a weight blended across it).
     Positions P = m.V;

@@ -21,7 +21,6 @@ using isokit::test::capsule_mesh;
 
 namespace {
 
-constexpr float kPi = 3.14159265358979f;
 
 float smoothstep(float a, float b, float x) {
   const float t = std::clamp((x - a) / (b - a), 0.f, 1.f);
@@ -209,7 +208,7 @@ SweepResult elbow_sweep(int max_deg, const TrackerOptions& options, bool expect_
   const float diag = test::diagonal(e.mesh.V);
   SweepResult result;
   auto check_step = [&](int deg) {
-    const TrackStats s = e.step(tracker, float(deg) * kPi / 180.f);
+    const TrackStats s = e.step(tracker, float(deg) * kPiF / 180.f);
     INFO("angle " << deg << " iterations " << s.iterations << " residual " << s.max_residual << " contacts "
                   << s.contact_vertices << " inverted " << s.inverted_triangles);
     if (expect_no_inversions) CHECK(s.inverted_triangles == 0);
@@ -228,7 +227,7 @@ SweepResult elbow_sweep(int max_deg, const TrackerOptions& options, bool expect_
     CHECK(e.P.allFinite());
     if (deg >= 120) CHECK(s.contact_vertices > 0);
     // Contact vertices lie in the inner fold: inside the wedge between the two bones.
-    const float a = float(deg) * kPi / 180.f;
+    const float a = float(deg) * kPiF / 180.f;
     const Vec3f bisector = Vec3f{0.f, -1.f, 0.f} + Vec3f{-std::sin(a), std::cos(a), 0.f};
     int outside = 0;
     for (std::size_t i = 0; i < tracker.flags().contact.size(); ++i)
@@ -294,8 +293,8 @@ TEST_CASE("tracker: Chebyshev acceleration recovers the rest pose faster than pl
   auto recovery = [](const TrackerOptions& o) {
     Elbow e;
     IsoSurfaceTracker tracker(e.mesh.V, e.mesh.F, e.iso, o);
-    for (int deg = 10; deg <= 60; deg += 10) e.step(tracker, float(deg) * kPi / 180.f);
-    for (int deg = 50; deg >= 0; deg -= 10) e.step(tracker, float(deg) * kPi / 180.f);
+    for (int deg = 10; deg <= 60; deg += 10) e.step(tracker, float(deg) * kPiF / 180.f);
+    for (int deg = 50; deg >= 0; deg -= 10) e.step(tracker, float(deg) * kPiF / 180.f);
     return test::max_distance(e.P, e.mesh.V) / test::diagonal(e.mesh.V);
   };
   const float with = recovery(elbow_options(256)), without = recovery(plain);
@@ -493,7 +492,7 @@ TEST_CASE("tracker: the orientation repair turns triangles on the wrong side of 
     V.topRows(b) = m.V;
     V.row(b) << 0.f, y, 0.f;
     for (int k = 0; k < sides; ++k) {
-      const float t = 2.f * kPi * float(k) / float(sides);
+      const float t = 2.f * kPiF * float(k) / float(sides);
       V.row(b + 1 + k) << radius * std::cos(t), y, radius * std::sin(t);
     }
     Triangles F(m.F.rows() + sides, 3);
@@ -551,8 +550,8 @@ TEST_CASE("tracker: serial and parallel runs are bit-identical", "[track][tracke
   IsoSurfaceTracker parallel(b.mesh.V, b.mesh.F, b.iso, elbow_options(37));
   auto compare = [&](int deg) {
     INFO("angle " << deg);
-    const TrackStats sa = a.step(serial, float(deg) * kPi / 180.f);
-    const TrackStats sb = b.step(parallel, float(deg) * kPi / 180.f);
+    const TrackStats sa = a.step(serial, float(deg) * kPiF / 180.f);
+    const TrackStats sb = b.step(parallel, float(deg) * kPiF / 180.f);
     CHECK(a.P == b.P);
     CHECK(sa.iterations == sb.iterations);
     CHECK(sa.max_residual == sb.max_residual);
@@ -622,8 +621,8 @@ TEST_CASE("tracker: the result does not depend on the caller's vertex order", "[
   IsoSurfaceTracker tb(b.mesh.V, b.mesh.F, b.iso, elbow_options(37));
   for (int deg : {30, 60, 90, 120, 150, 100, 50, 0}) {
     INFO("angle " << deg);
-    const TrackStats sa = a.step(ta, float(deg) * kPi / 180.f);
-    const TrackStats sb = b.step(tb, float(deg) * kPi / 180.f);
+    const TrackStats sa = a.step(ta, float(deg) * kPiF / 180.f);
+    const TrackStats sb = b.step(tb, float(deg) * kPiF / 180.f);
     CHECK(sa.iterations == sb.iterations);
     CHECK(sa.inverted_triangles == sb.inverted_triangles);
     CHECK(sa.max_residual == sb.max_residual);
@@ -652,8 +651,8 @@ TEST_CASE("tracker: CG relaxation is bit-identical serial and parallel", "[track
   IsoSurfaceTracker parallel(b.mesh.V, b.mesh.F, b.iso, o1);
   for (int deg : {40, 80, 120, 150, 100, 50, 0}) {
     INFO("angle " << deg);
-    const TrackStats sa = a.step(serial, float(deg) * kPi / 180.f);
-    const TrackStats sb = b.step(parallel, float(deg) * kPi / 180.f);
+    const TrackStats sa = a.step(serial, float(deg) * kPiF / 180.f);
+    const TrackStats sb = b.step(parallel, float(deg) * kPiF / 180.f);
     CHECK(a.P == b.P);
     CHECK(sa.solver_iterations == sb.solver_iterations);
     CHECK(sa.solver_iterations > 0);

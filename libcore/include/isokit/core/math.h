@@ -9,6 +9,10 @@
 
 namespace isokit {
 
+/// π, the one definition the project uses (double and float).
+inline constexpr double kPi = 3.14159265358979323846;
+inline constexpr float kPiF = 3.14159265358979323846f;
+
 template <class T>
 struct Vec3T {
   T x{0}, y{0}, z{0};
