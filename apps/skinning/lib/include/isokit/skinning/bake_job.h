@@ -1,0 +1,65 @@
+// SPDX-License-Identifier: MIT
+/// \file
+/// A bake as `isokit-skin bake` and `isokit-skin demo` run it, in steps a program can call:
+/// the animation a request names (`make_animation`), the warnings a fitted rig deserves
+/// (`fit_warnings`), the frame the pictures show (`peak_frame`), the result that is written
+/// (`main_result`) and the files written (`write_bake_outputs`).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "isokit/skinning/animation.h"
+#include "isokit/skinning/pipeline.h"
+#include "isokit/skinning/report.h"
+#include "isokit/skinning/views.h"
+
+namespace isokit::skinning {
+
+/// What to animate: exactly one of a clip, bends, or a pose script.
+struct AnimationRequest {
+  std::string clip;                ///< a clip of the rig, by name
+  std::vector<std::string> bends;  ///< `JOINT:AXIS:DEGREES`, bent from rest to the angle and back
+  std::string pose_script;         ///< path of a JSON pose script (docs/skinning.md)
+  int frames{31};                  ///< frames of a bend animation (rest, peak, rest)
+};
+
+/// The poses of a request, with what a report calls them.
+struct Animation {
+  std::vector<Pose> poses;       ///< local joint transforms per frame
+  std::vector<BendSpec> bends;   ///< the parsed bends (empty for a clip or a pose script)
+  std::string description;       ///< e.g. "--bend LeftLeg:x:150 (31 frames)"
+};
+
+/// \throw InputError unless exactly one source is given (cheap: check before loading a rig).
+void check_animation_request(const AnimationRequest& request);
+
+/// \throw InputError as `check_animation_request`, or naming the bad bend / clip / file.
+/// `max_step_rad` > 0 is mentioned in a bend animation's description.
+Animation make_animation(const Rig& rig, const AnimationRequest& request, double max_step_rad = 0);
+
+/// Warnings about a fitted rig, one line each: joints with vertices but no primitive, and limbs
+/// made of parts of fewer than `setup.fold_repair_min_part_vertices` vertices (under-resolved:
+/// docs/skinning.md, "Low-poly rigs").
+std::vector<std::string> fit_warnings(const FittedRig& fitted, const SkinSetup& setup);
+
+/// The frame whose pose is rotated farthest from the first (the first such frame).
+int peak_frame(const std::vector<Pose>& poses);
+
+/// The result of `method` (the one whose bake is written). \throw InputError when absent.
+const BakeResult& main_result(const std::vector<BakeResult>& results, Method method);
+
+/// Where a bake's outputs go; an empty path writes nothing.
+struct BakeOutputs {
+  std::string glb;         ///< the main result, one morph target per frame
+  std::string metrics;     ///< the metrics JSON of every result
+  std::string render_dir;  ///< contact sheet and one PNG per method and view
+  std::string ply_dir;     ///< one PLY per frame of the main result
+};
+
+/// Writes the outputs (parent folders created); returns what was written, one line each.
+std::vector<std::string> write_bake_outputs(const Rig& rig, const std::vector<BakeResult>& results,
+                                            const BakeResult& main, const ReportContext& context,
+                                            const std::vector<RenderView>& views, const BakeOutputs& outputs);
+
+}  // namespace isokit::skinning
