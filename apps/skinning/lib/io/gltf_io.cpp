@@ -2,15 +2,15 @@
 #include "io/gltf_io.h"
 
 #include <algorithm>
-#include <atomic>
-#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <limits>
 #include <sstream>
 
+#include "isokit/core/atomic_file.h"
 #include "isokit/core/error.h"
 
 namespace isokit::skinning::gltf {
@@ -104,40 +104,6 @@ std::string extension(const std::string& path) {
   std::string ext = fs::path(path).extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
   return ext;
-}
-
-void write_file_atomic(const std::string& path, const std::function<void(std::ostream&)>& write) {
-  const fs::path target(path);
-  require(!target.filename().empty(), path, "no file name", "give a file path such as out/rig.glb");
-  fs::path dir = target.parent_path();
-  if (dir.empty()) dir = ".";
-  std::error_code ec;
-  require(fs::is_directory(dir, ec), path, "folder '" + dir.string() + "' does not exist",
-          "create the folder first or choose another path");
-  require(!fs::is_directory(target, ec), path, "is a folder", "give a file path");
-  static std::atomic<unsigned> counter{0};
-  const auto stamp = std::chrono::steady_clock::now().time_since_epoch().count();
-  const fs::path tmp = dir / ("." + target.filename().string() + ".tmp" + std::to_string(stamp) + "_" +
-                              std::to_string(counter.fetch_add(1)));
-  try {
-    {
-      std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-      require(out.is_open(), path, "cannot create a temporary file in '" + dir.string() + "'",
-              "check that the folder is writable");
-      write(out);
-      out.flush();
-      require(out.good(), path, "write failed", "check the free disk space and the folder's permissions");
-      out.close();
-      require(!out.fail(), path, "write failed when closing", "check the free disk space");
-    }
-    fs::rename(tmp, target, ec);
-    require(!ec, path, "cannot rename the temporary file over it (" + ec.message() + ")",
-            "check the permissions of the folder and of an existing file");
-  } catch (...) {
-    std::error_code ignored;
-    fs::remove(tmp, ignored);
-    throw;
-  }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -289,7 +255,7 @@ void Builder::write(const std::string& path, bool binary) {
   }
   std::string text = doc_.dump();
   if (!binary) {
-    write_file_atomic(
+    write_stream_atomically(
         path, [&](std::ostream& out) { out.write(text.data(), static_cast<std::streamsize>(text.size())); });
     return;
   }
@@ -299,7 +265,7 @@ void Builder::write(const std::string& path, bool binary) {
   require(total <= std::numeric_limits<std::uint32_t>::max(), path,
           "the GLB would be " + std::to_string(total) + " bytes, over the format's 4 GiB limit",
           "write fewer frames or vertices");
-  write_file_atomic(path, [&](std::ostream& out) {
+  write_stream_atomically(path, [&](std::ostream& out) {
     put_u32(out, kGlbMagic);
     put_u32(out, 2);
     put_u32(out, static_cast<std::uint32_t>(total));

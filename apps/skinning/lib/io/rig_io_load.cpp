@@ -9,7 +9,6 @@
 #include <cstring>
 #include <filesystem>
 #include <map>
-#include <ostream>
 #include <random>
 #include <set>
 #include <unordered_map>
@@ -20,6 +19,7 @@
 #include <assimp/Importer.hpp>
 
 #include "io/gltf_io.h"
+#include "isokit/core/atomic_file.h"
 #include "isokit/core/error.h"
 #include "isokit/skinning/rig_io.h"
 
@@ -980,7 +980,7 @@ Rig Loader::load() {
         }
       } cleanup{dir};
       const std::string copy = (dir / "patched.gltf").string();
-      gltf::write_file_atomic(copy, [&](std::ostream& out) { out << gltf_.patched; });
+      write_text_file_atomically(copy, gltf_.patched);
       read(copy);
     }
   } catch (const InputError&) {

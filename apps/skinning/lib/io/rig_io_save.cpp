@@ -9,6 +9,7 @@
 #include <set>
 
 #include "io/gltf_io.h"
+#include "isokit/core/atomic_file.h"
 #include "isokit/core/error.h"
 #include "isokit/skinning/rig_io.h"
 
@@ -436,7 +437,7 @@ void write_ply(const std::string& path, const track::Positions& positions,
     for (int k = 0; k < 3; ++k)
       require(triangles(f, k) >= 0 && triangles(f, k) < nv, path + ": triangle " + std::to_string(f),
               "vertex index out of range", "indices must lie in [0, " + std::to_string(nv) + ")");
-  gltf::write_file_atomic(path, [&](std::ostream& out) {
+  write_stream_atomically(path, [&](std::ostream& out) {
     out << "ply\nformat binary_little_endian 1.0\ncomment isokit\nelement vertex " << nv
         << "\nproperty float x\nproperty float y\nproperty float z\nelement face " << triangles.rows()
         << "\nproperty list uchar int vertex_indices\nend_header\n";

@@ -83,7 +83,8 @@ void validate(const OperatorSpec& spec, const std::string& source);
 /// JSON text <-> spec (validated). \throw isokit::InputError naming `source` and the field.
 OperatorSpec spec_from_json(const std::string& text, const std::string& source);
 std::string spec_to_json(const OperatorSpec& spec);
-/// Files; save writes to a temporary name and renames.
+/// Files; save writes atomically (temporary name, then rename). \throw isokit::InputError naming
+/// the file if it cannot be read or written.
 OperatorSpec load_spec(const std::string& path);
 void save_spec(const OperatorSpec& spec, const std::string& path);
 
