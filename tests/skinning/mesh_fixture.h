@@ -2,6 +2,7 @@
 // A plain triangle mesh for the skinning tests that build their own shapes (metrics, renders).
 #pragma once
 
+#include "isokit/core/math.h"
 #include "isokit/track/mesh.h"
 
 namespace isokit::skinning::testing {
