@@ -7,6 +7,7 @@
 #include <fstream>
 
 #include "isokit/core/error.h"
+#include "isokit/core/math.h"
 #include "isokit/plot/figure.h"
 
 using namespace isokit;
@@ -36,7 +37,7 @@ TEST_CASE("iso-segments of a radial function lie on the circle", "[plot]") {
       for (const auto& s : segs)
         for (const auto& p : s) CHECK(std::abs(std::hypot(p[0], p[1]) - radius) <= h * h / radius);
       // Length converges to the circumference (polygon inscribed in the circle).
-      const double circumference = 2 * M_PI * radius;
+      const double circumference = 2 * kPi * radius;
       CHECK(std::abs(total_length(segs) - circumference) <=
             circumference * std::min(0.5, h * h / (radius * radius)));
     }

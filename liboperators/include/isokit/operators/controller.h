@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "isokit/core/hostdev.h"
+#include "isokit/core/math.h"
 
 namespace isokit::operators {
 
@@ -21,7 +22,7 @@ struct ControllerTable {
 
   /// `d(α)`; `α` is clamped to [0, π].
   ISOKIT_HOSTDEV float operator()(float alpha) const {
-    const float t = alpha * (float(kSize - 1) / 3.14159265358979f);
+    const float t = alpha * (float(kSize - 1) / kPiF);
     if (!(t > 0.f)) return values[0];  // also catches NaN
     if (t >= float(kSize - 1)) return values[kSize - 1];
     const int i = int(t);
