@@ -11,6 +11,7 @@
 #include <map>
 #include <memory>
 
+#include "isokit/core/math.h"
 #include "isokit/skinning/animation.h"
 #include "isokit/skinning/pipeline.h"
 #include "isokit/skinning/procedural.h"
@@ -94,8 +95,8 @@ void BM_SkinStep(benchmark::State& state) {
   const Method method = all_methods()[static_cast<std::size_t>(state.range(0))];
   const int vertices = static_cast<int>(state.range(1));
   const double step = double(state.range(2)) / 1000.0;
-  Skinner& sk = skinner(vertices, 0.0);                    // library defaults: the paper's sub-step rule only
-  const double max_rad = 90.0 * 3.14159265358979 / 180.0;  // the largest bend of crouch_bends
+  Skinner& sk = skinner(vertices, 0.0);               // library defaults: the paper's sub-step rule only
+  const double max_rad = 90.0 * isokit::kPi / 180.0;  // the largest bend of crouch_bends
   const int frames = 2 * static_cast<int>(std::ceil(max_rad / step - 1e-9)) + 1;
   const std::vector<BendSpec> bends = crouch_bends(sk.rig());
   const std::vector<Pose> poses = bend_animation(sk.rig(), bends, frames);

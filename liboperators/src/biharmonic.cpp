@@ -61,6 +61,11 @@ struct BiharmonicOperatorGenerator::Impl {
   Constraints constraints_at(const OperatorSpec& sp, double d) const;
   Constraints constraints_at(double d) const { return constraints_at(spec, d); }
   void init_schur();
+  std::vector<int> constraint_counts() const;
+  void partition_nodes(const std::vector<int>& count);
+  SpMat split_system();
+  void schur_complement(const SpMat& M_DD);
+  void invert_schur();
   void prepare(Workspace& w, bool need_ff) const;
   std::vector<float> solve(Workspace& w, double d) const;
   std::vector<double> solve_refactor(Workspace& w, const Constraints& c) const;
@@ -164,6 +169,21 @@ Constraints BiharmonicOperatorGenerator::Impl::constraints_at(const OperatorSpec
 }
 
 void BiharmonicOperatorGenerator::Impl::init_schur() {
+  partition_nodes(constraint_counts());
+  const bool want = opt.scheme == SliceScheme::kSchur ||
+                    (opt.scheme == SliceScheme::kAuto &&
+                     (opt.edit_band_cells > 0 || stats.dynamic_nodes <= opt.max_schur_nodes));
+  if (!want) return;
+  const SpMat M_DD = split_system();
+  prepare(main, true);
+  schur_complement(M_DD);
+  invert_schur();
+  schur = true;
+}
+
+/// Per unknown, the number of slices that constrain it; when editing, 1 for every node within
+/// `edit_band_cells` of any slice's constraints (count 1 marks "some slices"), else 0.
+std::vector<int> BiharmonicOperatorGenerator::Impl::constraint_counts() const {
   const int U = static_cast<int>(node_of_u.size());
   // Constrained-node sets of every slice (in parallel; each slice writes its own entry).
   std::vector<std::vector<int>> sets(static_cast<std::size_t>(spec.slices));
@@ -189,6 +209,13 @@ void BiharmonicOperatorGenerator::Impl::init_schur() {
     }
     for (int u = 0; u < U; ++u) count[u] = band[u];
   }
+  return count;
+}
+
+/// Splits the unknowns into static (constrained in every slice), dynamic (D: in some slices, or
+/// in the editing band) and free (F: the rest, static included).
+void BiharmonicOperatorGenerator::Impl::partition_nodes(const std::vector<int>& count) {
+  const int U = static_cast<int>(node_of_u.size());
   is_static.assign(U, 0);
   d_index.assign(U, -1);
   f_index.assign(U, -1);
@@ -206,11 +233,11 @@ void BiharmonicOperatorGenerator::Impl::init_schur() {
     }
   }
   stats.dynamic_nodes = static_cast<int>(D.size());
-  const bool want = opt.scheme == SliceScheme::kSchur ||
-                    (opt.scheme == SliceScheme::kAuto &&
-                     (opt.edit_band_cells > 0 || stats.dynamic_nodes <= opt.max_schur_nodes));
-  if (!want) return;
-  // M = K with the static nodes' rows and columns replaced by identity.
+}
+
+/// M = K with the static nodes' rows and columns replaced by identity, split into the blocks
+/// M_FF, M_FD (members) and M_DD (returned).
+SpMat BiharmonicOperatorGenerator::Impl::split_system() {
   std::vector<Eigen::Triplet<double>> tff, tfd, tdd;
   for (int c = 0; c < K.outerSize(); ++c)
     for (SpMat::InnerIterator it(K, c); it; ++it) {
@@ -233,9 +260,13 @@ void BiharmonicOperatorGenerator::Impl::init_schur() {
   M_FD.setFromTriplets(tfd.begin(), tfd.end());
   SpMat M_DD(ndyn, ndyn);
   M_DD.setFromTriplets(tdd.begin(), tdd.end());
-  prepare(main, true);
-  // S = M_DD - M_DF M_FF⁻¹ M_FD (M_DF = M_FDᵀ), in column blocks (bounded memory), the blocks
-  // split over parallel tasks; each task but the first factors M_FF for itself.
+  return M_DD;
+}
+
+/// S = M_DD - M_DF M_FF⁻¹ M_FD (M_DF = M_FDᵀ), in column blocks (bounded memory), the blocks
+/// split over parallel tasks; each task but the first factors M_FF for itself.
+void BiharmonicOperatorGenerator::Impl::schur_complement(const SpMat& M_DD) {
+  const int ndyn = static_cast<int>(D.size());
   S = Eigen::MatrixXd(M_DD);
   constexpr int kBlock = 32;
   const int blocks = (ndyn + kBlock - 1) / kBlock;
@@ -260,14 +291,17 @@ void BiharmonicOperatorGenerator::Impl::init_schur() {
       S.middleCols(c0, bc) -= M_FD.transpose() * Z;  // disjoint columns per task
     }
   });
-  // S⁻¹ = L⁻ᵀ L⁻¹ from the Cholesky factor (triangular inverse + symmetric rank-k product).
+}
+
+/// S⁻¹ = L⁻ᵀ L⁻¹ from the Cholesky factor (triangular inverse + symmetric rank-k product).
+void BiharmonicOperatorGenerator::Impl::invert_schur() {
+  const int ndyn = static_cast<int>(D.size());
   const Eigen::LLT<Eigen::MatrixXd> llt(S);
   Eigen::MatrixXd Linv = Eigen::MatrixXd::Identity(ndyn, ndyn);
   llt.matrixL().solveInPlace(Linv);
   S_inv = Eigen::MatrixXd::Zero(ndyn, ndyn);
   S_inv.selfadjointView<Eigen::Lower>().rankUpdate(Linv.transpose());
   S_inv.triangularView<Eigen::StrictlyUpper>() = S_inv.transpose();
-  schur = true;
 }
 
 void BiharmonicOperatorGenerator::Impl::prepare(Workspace& w, bool need_ff) const {

@@ -4,12 +4,9 @@
 #include <cmath>
 
 #include "isokit/core/error.h"
+#include "isokit/core/math.h"
 
 namespace isokit::operators {
-namespace {
-constexpr double kPi = 3.14159265358979323846;
-}
-
 Controller::Controller(std::vector<ControllerKnot> knots, std::string name)
     : knots_(std::move(knots)), name_(std::move(name)) {
   const std::string what = "controller '" + name_ + "'";

@@ -8,7 +8,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "atomic_file.h"
+#include "isokit/core/atomic_file.h"
 #include "isokit/core/error.h"
 
 namespace isokit::operators {
@@ -63,7 +63,7 @@ static std::string npy_bytes(const float* data, int d0, int d1, int d2) {
 
 void write_npy_f32(const std::string& path, const float* data, int d0, int d1, int d2) {
   const std::string bytes = npy_bytes(data, d0, d1, d2);
-  detail::write_file_atomic(path, bytes.data(), bytes.size());
+  write_bytes_atomically(path, bytes.data(), bytes.size());
 }
 
 std::vector<float> read_npy_f32(const std::string& path, int* d0, int* d1, int* d2) {
@@ -155,9 +155,10 @@ void save_operator(const std::string& npy_path, const OperatorSpec& spec, const 
                {"shape", {grid.nd(), grid.nf(), grid.nf()}},
                {"layout", "g[k, i1, i2] = g(f1 = i1/(nf-1), f2 = i2/(nf-1); d = k/(nd-1))"}};
   const std::string json_text = j.dump(2) + "\n";
-  // Both files first go to temporary names; the .npy is renamed last only after the spec succeeded.
+  // Each file goes to a temporary name first; the .npy is written and renamed last, only after the
+  // spec succeeded, so a failure never leaves a new .npy beside an old spec.
   const std::string json_path = spec_path_for(npy_path);
-  detail::write_file_atomic(json_path, json_text.data(), json_text.size());
+  write_text_file_atomically(json_path, json_text);
   write_npy_f32(npy_path, grid.data().data(), grid.nd(), grid.nf(), grid.nf());
 }
 

@@ -8,7 +8,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "atomic_file.h"
+#include "isokit/core/atomic_file.h"
 #include "isokit/core/error.h"
 #include "isokit/operators/profile.h"
 
@@ -357,7 +357,7 @@ OperatorSpec load_spec(const std::string& path) {
 
 void save_spec(const OperatorSpec& spec, const std::string& path) {
   const std::string text = spec_to_json(spec);
-  detail::write_file_atomic(path, text.data(), text.size());
+  write_text_file_atomically(path, text);
 }
 
 }  // namespace isokit::operators

@@ -2,7 +2,6 @@
 #include "isokit/track/mesh_io.h"
 
 #include <cmath>
-#include <cstdio>
 #include <vector>
 
 // GCC 12 reports -Wmaybe-uninitialized inside OpenMesh's property containers when they are
@@ -13,17 +12,13 @@
 #include <OpenMesh/Core/IO/MeshIO.hh>
 #include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
 
+#include "isokit/core/atomic_file.h"
 #include "isokit/core/error.h"
 
 namespace isokit::track {
 
 namespace {
 using OmMesh = OpenMesh::TriMesh_ArrayKernelT<>;
-
-std::string extension(const std::string& path) {
-  const auto dot = path.find_last_of('.');
-  return dot == std::string::npos ? std::string() : path.substr(dot);
-}
 }  // namespace
 
 TriangleMesh read_mesh(const std::string& path) {
@@ -62,11 +57,10 @@ void write_mesh(const std::string& path, const Positions& vertices, const Triang
     require(fh.is_valid(), "triangle " + std::to_string(f), "makes the mesh non-manifold",
             "fix the connectivity before writing");
   }
-  const std::string tmp = path + ".tmp" + extension(path);
-  require(OpenMesh::IO::write_mesh(mesh, tmp), "mesh file " + path, "cannot be written",
-          "check the directory and the extension");
-  require(std::rename(tmp.c_str(), path.c_str()) == 0, "mesh file " + path, "cannot be renamed into place",
-          "check permissions");
+  write_file_atomically(path, [&](const std::string& tmp) {  // the temporary name keeps the extension
+    require(OpenMesh::IO::write_mesh(mesh, tmp), "mesh file " + path, "cannot be written",
+            "check the directory and the extension");
+  });
 }
 
 }  // namespace isokit::track

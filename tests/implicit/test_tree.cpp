@@ -130,7 +130,7 @@ TEST_CASE("tape diagnostics report alpha, d, the dominant operand and contact", 
   std::vector<NodeDiagnostics> diag(tape.size());
   // On the x axis between the centres the gradients are opposite: α = π, d = 1, both inside.
   tape.eval({0.05f, 0, 0}, diag.data(), true);
-  CHECK(diag[2].alpha == Approx(3.14159).margin(1e-3));
+  CHECK(diag[2].alpha == Approx(kPi).margin(1e-3));
   CHECK(diag[2].d == Approx(1.0).margin(1e-3));
   CHECK(diag[2].on_contact == 1);
   CHECK(diag[2].dominant == 2);  // closer to b's centre

@@ -49,7 +49,7 @@ TEST_CASE("spec JSON round trip is exact for every preset and a custom controlle
   }
   OperatorSpec s = preset_spec("bulge", 16);
   s.controller = "mine";
-  s.controller_knots = {{0, 0}, {0.123456789012345, 0.3}, {3.14159265358979323846, 1}};
+  s.controller_knots = {{0, 0}, {0.123456789012345, 0.3}, {kPi, 1}};
   s.distance_slope = 0.7;
   CHECK(spec_from_json(spec_to_json(s), "mem") == s);
 }

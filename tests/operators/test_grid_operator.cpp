@@ -151,8 +151,8 @@ TEST_CASE("grid operator: vectorised and scalar bicubic agree bit for bit; weigh
         for (float& x : row) x = float(rng.uniform(-2, 2));
     const float w = rng.integer(0, 1) ? 0.f : float(rng.uniform(0, 1));
     const float t1 = float(rng.uniform(0, 1)), t2 = i % 7 == 0 ? 0.f : float(rng.uniform(0, 1));
-    const auto a = operators::GridOperatorView::bicubic(&rows[0][0][1], 6, 24, w, t1, t2, 127.f);
-    const auto b = operators::GridOperatorView::bicubic_scalar(&rows[0][0][1], 6, 24, w, t1, t2, 127.f);
+    const auto a = operators::bicubic(&rows[0][0][1], 6, 24, w, t1, t2, 127.f);
+    const auto b = operators::bicubic_scalar(&rows[0][0][1], 6, 24, w, t1, t2, 127.f);
     REQUIRE(a.g == b.g);
     REQUIRE(a.dg1 == b.dg1);
     REQUIRE(a.dg2 == b.dg2);
@@ -161,7 +161,7 @@ TEST_CASE("grid operator: vectorised and scalar bicubic agree bit for bit; weigh
   for (int i = 0; i <= 1000; ++i) {
     const float t = float(i) / 1000.f;
     float w[4], dw[4];
-    operators::GridOperatorView::catmull_rom(t, w, dw);
+    operators::catmull_rom(t, w, dw);
     CHECK(w[0] + w[1] + w[2] + w[3] == Approx(1.0).margin(1e-6));
     CHECK(dw[0] + dw[1] + dw[2] + dw[3] == Approx(0.0).margin(1e-6));
     if (i == 0 || i == 1000) {

@@ -6,30 +6,31 @@
 
 #include <cmath>
 
+#include "isokit/core/math.h"
 #include "isokit/skinning/rig.h"
 
 namespace isokit::skinning::testing {
 
 inline Rig capsule_rig(int rings = 40, int segments = 24, int cap_rings = 6) {
-  const double pi = 3.14159265358979323846, R = 0.25, L = 2.0;
+  const double R = 0.25, L = 2.0;
   Rig r;
   r.name = "test:capsule";
   std::vector<Eigen::Vector3d> v;
   // Profile: bottom pole, cap rings, tube rings, cap rings, top pole.
   std::vector<std::pair<double, double>> prof;  // (y, radius)
   for (int k = 1; k <= cap_rings; ++k) {
-    const double a = -pi / 2 + pi / 2 * k / (cap_rings + 1.0);
+    const double a = -kPi / 2 + kPi / 2 * k / (cap_rings + 1.0);
     prof.push_back({R * std::sin(a), R * std::cos(a)});
   }
   for (int k = 0; k <= rings; ++k) prof.push_back({L * k / rings, R});
   for (int k = cap_rings; k >= 1; --k) {
-    const double a = -pi / 2 + pi / 2 * k / (cap_rings + 1.0);
+    const double a = -kPi / 2 + kPi / 2 * k / (cap_rings + 1.0);
     prof.push_back({L - R * std::sin(a), R * std::cos(a)});
   }
   v.push_back({0, -R, 0});
   for (auto [y, rad] : prof)
     for (int s = 0; s < segments; ++s) {
-      const double t = 2 * pi * (s + 0.5 * (&prof.front() - &prof.front())) / segments;
+      const double t = 2 * kPi * (s + 0.5 * (&prof.front() - &prof.front())) / segments;
       v.push_back({rad * std::cos(t), y, -rad * std::sin(t)});
     }
   v.push_back({0, L + R, 0});

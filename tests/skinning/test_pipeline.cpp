@@ -2,6 +2,7 @@
 #include <catch2/catch.hpp>
 
 #include "isokit/core/error.h"
+#include "isokit/core/math.h"
 #include "isokit/skinning/animation.h"
 #include "isokit/skinning/deform.h"
 #include "isokit/skinning/pipeline.h"
@@ -38,7 +39,7 @@ TEST_CASE("pipeline: bends, sub-steps and pose scripts", "[skinning][pipeline]")
   CHECK(parse_bend("1:x:-45", r).joint == 1);
   const auto poses = bend_animation(r, {parse_bend("Bone1:z:150", r)}, 31);
   REQUIRE(poses.size() == 31);
-  CHECK(max_rotation_between(poses[0], poses[15]) == Approx(150 * 3.14159265358979 / 180).epsilon(1e-9));
+  CHECK(max_rotation_between(poses[0], poses[15]) == Approx(150 * isokit::kPi / 180).epsilon(1e-9));
   CHECK(max_rotation_between(poses[0], poses[30]) < 1e-12);
   SubstepOptions o;
   o.paper_rule = false;
@@ -70,7 +71,7 @@ TEST_CASE("pipeline: bends, sub-steps and pose scripts", "[skinning][pipeline]")
   const auto script = pose_script_from_json(
       r, R"({"keys": [{"frame": 0}, {"frame": 4, "joints": {"Bone1": [["z", 80]]}}]})", "script.json");
   REQUIRE(script.size() == 5);
-  CHECK(max_rotation_between(script[0], script[2]) == Approx(40 * 3.14159265358979 / 180).epsilon(1e-9));
+  CHECK(max_rotation_between(script[0], script[2]) == Approx(40 * isokit::kPi / 180).epsilon(1e-9));
   CHECK_THROWS_WITH(pose_script_from_json(r, R"({"keys": [{"frame": 0, "joints": {"Nope": []}}]})", "s.json"),
                     Catch::Contains("s.json") && Catch::Contains("Nope"));
 }

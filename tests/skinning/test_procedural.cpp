@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "isokit/core/error.h"
+#include "isokit/core/math.h"
 #include "isokit/skinning/procedural.h"
 #include "isokit/skinning/weights.h"
 
@@ -53,7 +54,7 @@ double winding(const Rig& rig, const Eigen::Vector3d& p) {
     const double la = a.norm(), lb = b.norm(), lc = c.norm();
     sum += 2 * std::atan2(a.dot(b.cross(c)), la * lb * lc + a.dot(b) * lc + b.dot(c) * la + c.dot(a) * lb);
   }
-  return sum / (4 * M_PI);
+  return sum / (4 * isokit::kPi);
 }
 
 void check_rest_identity(const Rig& rig) {
@@ -67,7 +68,7 @@ Eigen::Vector3d bent_position(const Rig& rig, const std::string& bent, const Eig
   const int j = rig.joint_index(bent);
   REQUIRE(j >= 0);
   local[static_cast<std::size_t>(j)] =
-      local[static_cast<std::size_t>(j)] * Affine(Eigen::AngleAxisd(degrees * M_PI / 180, axis));
+      local[static_cast<std::size_t>(j)] * Affine(Eigen::AngleAxisd(degrees * isokit::kPi / 180, axis));
   return world_transforms(rig, local)[static_cast<std::size_t>(rig.joint_index(joint))].translation();
 }
 
@@ -107,7 +108,7 @@ TEST_CASE("procedural: bending the cylinder and finger about +x swings toward +z
   const Rig c = make_cylinder();
   // Bone1's bone end (y = length) follows Bone1: its skinning matrix moves the top cap forward.
   std::vector<Affine> local = rest_pose(c);
-  local[1] = local[1] * Affine(Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitX()));
+  local[1] = local[1] * Affine(Eigen::AngleAxisd(isokit::kPi / 2, Eigen::Vector3d::UnitX()));
   const Affine m = skinning_matrices(c, local)[1];
   const Eigen::Vector3d top = m * Eigen::Vector3d(0, 2.0, 0);
   CHECK(top.z() == Approx(1.0).margin(1e-9));

@@ -22,6 +22,7 @@
 #include <nlohmann/json.hpp>
 
 #include "isokit/core/error.h"
+#include "isokit/core/math.h"
 #include "isokit/skinning/rig_io.h"
 
 using namespace isokit::skinning;
@@ -751,7 +752,7 @@ TEST_CASE("rig_io: a mesh with a skeleton but no weights loads with empty weight
   CHECK(rig.clips[0].local.size() == 31);  // 1 s at 30 fps
   // The animated joint turns by 90 degrees about z over the clip.
   const Eigen::Matrix3d end = rig.clips[0].local.back()[1].linear();
-  CHECK(end.isApprox(Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitZ()).toRotationMatrix(), 1e-5));
+  CHECK(end.isApprox(Eigen::AngleAxisd(isokit::kPi / 2, Eigen::Vector3d::UnitZ()).toRotationMatrix(), 1e-5));
 
   // Skinned, with ignore_weights: skeleton kept, weights dropped.
   write_all(dir.file("skinned.gltf"), tiny_gltf(kTriangle, true, 2, 1, false));

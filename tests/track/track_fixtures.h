@@ -7,6 +7,7 @@
 #include <memory>
 #include <vector>
 
+#include "isokit/core/math.h"
 #include "isokit/implicit/field.h"
 #include "isokit/implicit/primitives.h"
 #include "isokit/operators/biharmonic.h"
@@ -31,16 +32,15 @@ inline Mesh capsule_mesh(float radius, float half_length, int around, int cylind
     float y, rho;
   };
   std::vector<Ring> rings;
-  const float pi = 3.14159265358979f;
   for (int k = 1; k < cap_rings; ++k) {
-    const float phi = (pi / 2) * float(k) / float(cap_rings);
+    const float phi = (kPiF / 2) * float(k) / float(cap_rings);
     rings.push_back({-half_length - radius * std::cos(phi), radius * std::sin(phi)});
   }
   const int cs = half_length > 0.f ? cylinder_segments : 0;
   for (int k = 0; k <= cs; ++k)
     rings.push_back({cs == 0 ? 0.f : -half_length + 2.f * half_length * float(k) / float(cs), radius});
   for (int k = cap_rings - 1; k >= 1; --k) {
-    const float phi = (pi / 2) * float(k) / float(cap_rings);
+    const float phi = (kPiF / 2) * float(k) / float(cap_rings);
     rings.push_back({half_length + radius * std::cos(phi), radius * std::sin(phi)});
   }
   const int nr = static_cast<int>(rings.size());
@@ -49,7 +49,7 @@ inline Mesh capsule_mesh(float radius, float half_length, int around, int cylind
   m.V.row(0) << 0.f, -half_length - radius, 0.f;
   for (int k = 0; k < nr; ++k)
     for (int a = 0; a < around; ++a) {
-      const float t = 2.f * pi * float(a) / float(around);
+      const float t = 2.f * kPiF * float(a) / float(around);
       m.V.row(1 + k * around + a) << rings[k].rho * std::cos(t), rings[k].y, rings[k].rho * std::sin(t);
     }
   const int top = 1 + nr * around;

@@ -6,6 +6,7 @@
 #include <cstdio>
 
 #include "isokit/core/error.h"
+#include "isokit/core/math.h"
 #include "isokit/operators/profile.h"
 #include "isokit/plot/figure.h"
 
@@ -15,8 +16,6 @@ using operators::StoredOperator;
 using plot::Point2;
 
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 std::string fmt(double v, int digits = 3) {
   char b[64];

@@ -12,6 +12,7 @@
 #include <stdexcept>
 #include <utility>
 
+#include "isokit/core/atomic_file.h"
 #include "isokit/core/error.h"
 
 namespace isokit::plot {
@@ -131,94 +132,124 @@ void Figure::add_caption(const std::string& line) {
   caption_.push_back(line);
 }
 
+/// Draws a figure in pixels: the layout (plot area, margins, title and caption bands) and one
+/// member per layer, painted in order: background, heat map, strokes, labels, title and caption.
+class Figure::Painter {
+ public:
+  explicit Painter(const Figure& figure)
+      : f_(figure),
+        plot_w_(f_.options_.pixel_size),
+        plot_h_(plot_w_ * (f_.grid_.y1 - f_.grid_.y0) / (f_.grid_.x1 - f_.grid_.x0)),
+        title_h_(f_.options_.title.empty() ? 0 : 24),
+        width_(plot_w_ + 2 * kMargin),
+        height_(plot_h_ + 2 * kMargin + title_h_ + kLineH * double(f_.caption_.size())),
+        ox_(kMargin),
+        oy_(kMargin + title_h_) {}
+
+  /// Paints the figure and writes it to `file` as `ext` (png, svg or pdf); the Cairo status.
+  cairo_status_t write(const std::string& ext, const std::string& file) const {
+    using SurfacePtr = std::unique_ptr<cairo_surface_t, decltype(&cairo_surface_destroy)>;
+    SurfacePtr surface(ext == "png"
+                           ? cairo_image_surface_create(CAIRO_FORMAT_RGB24, int(width_), int(height_))
+                       : ext == "svg" ? cairo_svg_surface_create(file.c_str(), width_, height_)
+                                      : cairo_pdf_surface_create(file.c_str(), width_, height_),
+                       &cairo_surface_destroy);
+    std::unique_ptr<cairo_t, decltype(&cairo_destroy)> cr(cairo_create(surface.get()), &cairo_destroy);
+    cairo_t* c = cr.get();
+    cairo_set_source_rgb(c, 1, 1, 1);
+    cairo_paint(c);
+    heat_map(c);
+    strokes(c);
+    labels(c);
+    title_and_caption(c);
+    cr.reset();
+    if (ext == "png") return cairo_surface_write_to_png(surface.get(), file.c_str());
+    cairo_surface_finish(surface.get());
+    return cairo_surface_status(surface.get());
+  }
+
+ private:
+  static constexpr double kMargin = 16, kLineH = 16;
+
+  Point2 to_px(const Point2& p) const {
+    const ScalarGrid& g = f_.grid_;
+    return {ox_ + (p[0] - g.x0) / (g.x1 - g.x0) * plot_w_,
+            oy_ + plot_h_ - (p[1] - g.y0) / (g.y1 - g.y0) * plot_h_};
+  }
+
+  /// One rectangle per sample cell, coloured by the cell-centre average.
+  void heat_map(cairo_t* c) const {
+    const ScalarGrid& g = f_.grid_;
+    const FigureOptions& o = f_.options_;
+    const double cw = plot_w_ / (g.nx - 1), ch = plot_h_ / (g.ny - 1);
+    for (int j = 0; j + 1 < g.ny; ++j)
+      for (int i = 0; i + 1 < g.nx; ++i) {
+        const double v = 0.25 * (double(g.at(i, j)) + g.at(i + 1, j) + g.at(i, j + 1) + g.at(i + 1, j + 1));
+        const Rgb col = colormap((v - o.value_min) / (o.value_max - o.value_min));
+        cairo_set_source_rgb(c, col[0], col[1], col[2]);
+        const Point2 p = to_px({g.x(i), g.y(j + 1)});
+        cairo_rectangle(c, p[0], p[1], cw + 0.5, ch + 0.5);
+        cairo_fill(c);
+      }
+  }
+
+  void strokes(cairo_t* c) const {
+    for (const Stroke& s : f_.strokes_) {
+      cairo_set_source_rgb(c, s.color[0], s.color[1], s.color[2]);
+      cairo_set_line_width(c, s.width);
+      cairo_set_line_cap(c, CAIRO_LINE_CAP_ROUND);
+      const double dash[] = {6.0, 4.0};
+      cairo_set_dash(c, dash, s.dashed ? 2 : 0, 0);
+      for (const auto& seg : s.segments) {
+        const Point2 a = to_px(seg[0]), b = to_px(seg[1]);
+        cairo_move_to(c, a[0], a[1]);
+        cairo_line_to(c, b[0], b[1]);
+      }
+      cairo_stroke(c);
+    }
+    cairo_set_dash(c, nullptr, 0, 0);
+  }
+
+  void labels(cairo_t* c) const {
+    cairo_select_font_face(c, "sans-serif", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_NORMAL);
+    cairo_set_font_size(c, 13);
+    for (const Label& l : f_.labels_) {
+      const Point2 p = to_px(l.at);
+      cairo_set_source_rgb(c, l.color[0], l.color[1], l.color[2]);
+      cairo_move_to(c, p[0], p[1]);
+      cairo_show_text(c, l.text.c_str());
+    }
+  }
+
+  void title_and_caption(cairo_t* c) const {
+    cairo_set_source_rgb(c, 0, 0, 0);
+    if (!f_.options_.title.empty()) {
+      cairo_set_font_size(c, 15);
+      cairo_move_to(c, kMargin, kMargin + 14);
+      cairo_show_text(c, f_.options_.title.c_str());
+    }
+    cairo_set_font_size(c, 12);
+    for (std::size_t k = 0; k < f_.caption_.size(); ++k) {
+      cairo_move_to(c, kMargin, oy_ + plot_h_ + kMargin + kLineH * double(k) + 4);
+      cairo_show_text(c, f_.caption_[k].c_str());
+    }
+  }
+
+  const Figure& f_;
+  const double plot_w_, plot_h_, title_h_, width_, height_, ox_, oy_;
+};
+
 void Figure::save(const std::string& path) const {
   const std::string ext = extension_of(path);
   require(ext == "png" || ext == "svg" || ext == "pdf", "figure file '" + path + "'",
           "has an unknown extension '" + ext + "'", "use .png, .svg or .pdf");
-  const double margin = 16, line_h = 16;
-  const double plot_w = options_.pixel_size;
-  const double plot_h = plot_w * (grid_.y1 - grid_.y0) / (grid_.x1 - grid_.x0);
-  const double title_h = options_.title.empty() ? 0 : 24;
-  const double width = plot_w + 2 * margin;
-  const double height = plot_h + 2 * margin + title_h + line_h * double(caption_.size());
-  const std::string tmp = path + ".tmp";
-
-  using SurfacePtr = std::unique_ptr<cairo_surface_t, decltype(&cairo_surface_destroy)>;
-  SurfacePtr surface(ext == "png"   ? cairo_image_surface_create(CAIRO_FORMAT_RGB24, int(width), int(height))
-                     : ext == "svg" ? cairo_svg_surface_create(tmp.c_str(), width, height)
-                                    : cairo_pdf_surface_create(tmp.c_str(), width, height),
-                     &cairo_surface_destroy);
-  std::unique_ptr<cairo_t, decltype(&cairo_destroy)> cr(cairo_create(surface.get()), &cairo_destroy);
-  cairo_t* c = cr.get();
-  cairo_set_source_rgb(c, 1, 1, 1);
-  cairo_paint(c);
-
-  // Heat map: one rectangle per sample cell, coloured by the cell-centre average.
-  const double ox = margin, oy = margin + title_h;
-  auto to_px = [&](const Point2& p) -> Point2 {
-    return {ox + (p[0] - grid_.x0) / (grid_.x1 - grid_.x0) * plot_w,
-            oy + plot_h - (p[1] - grid_.y0) / (grid_.y1 - grid_.y0) * plot_h};
-  };
-  const double cw = plot_w / (grid_.nx - 1), ch = plot_h / (grid_.ny - 1);
-  for (int j = 0; j + 1 < grid_.ny; ++j)
-    for (int i = 0; i + 1 < grid_.nx; ++i) {
-      const double v =
-          0.25 * (double(grid_.at(i, j)) + grid_.at(i + 1, j) + grid_.at(i, j + 1) + grid_.at(i + 1, j + 1));
-      const Rgb col = colormap((v - options_.value_min) / (options_.value_max - options_.value_min));
-      cairo_set_source_rgb(c, col[0], col[1], col[2]);
-      const Point2 p = to_px({grid_.x(i), grid_.y(j + 1)});
-      cairo_rectangle(c, p[0], p[1], cw + 0.5, ch + 0.5);
-      cairo_fill(c);
-    }
-  for (const Stroke& s : strokes_) {
-    cairo_set_source_rgb(c, s.color[0], s.color[1], s.color[2]);
-    cairo_set_line_width(c, s.width);
-    cairo_set_line_cap(c, CAIRO_LINE_CAP_ROUND);
-    const double dash[] = {6.0, 4.0};
-    cairo_set_dash(c, dash, s.dashed ? 2 : 0, 0);
-    for (const auto& seg : s.segments) {
-      const Point2 a = to_px(seg[0]), b = to_px(seg[1]);
-      cairo_move_to(c, a[0], a[1]);
-      cairo_line_to(c, b[0], b[1]);
-    }
-    cairo_stroke(c);
-  }
-  cairo_set_dash(c, nullptr, 0, 0);
-  cairo_select_font_face(c, "sans-serif", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_NORMAL);
-  cairo_set_font_size(c, 13);
-  for (const Label& l : labels_) {
-    const Point2 p = to_px(l.at);
-    cairo_set_source_rgb(c, l.color[0], l.color[1], l.color[2]);
-    cairo_move_to(c, p[0], p[1]);
-    cairo_show_text(c, l.text.c_str());
-  }
-  cairo_set_source_rgb(c, 0, 0, 0);
-  if (!options_.title.empty()) {
-    cairo_set_font_size(c, 15);
-    cairo_move_to(c, margin, margin + 14);
-    cairo_show_text(c, options_.title.c_str());
-  }
-  cairo_set_font_size(c, 12);
-  for (std::size_t k = 0; k < caption_.size(); ++k) {
-    cairo_move_to(c, margin, oy + plot_h + margin + line_h * double(k) + 4);
-    cairo_show_text(c, caption_[k].c_str());
-  }
-  cr.reset();
-  cairo_status_t status = CAIRO_STATUS_SUCCESS;
-  if (ext == "png") {
-    status = cairo_surface_write_to_png(surface.get(), tmp.c_str());
-  } else {
-    cairo_surface_finish(surface.get());
-    status = cairo_surface_status(surface.get());
-  }
-  surface.reset();
-  if (status != CAIRO_STATUS_SUCCESS || std::rename(tmp.c_str(), path.c_str()) != 0) {
-    std::remove(tmp.c_str());
-    throw std::runtime_error(
-        "cannot write figure '" + path +
-        "': " + (status != CAIRO_STATUS_SUCCESS ? cairo_status_to_string(status) : "rename failed") +
-        "; check that the folder exists and is writable");
-  }
+  const Painter painter(*this);
+  write_file_atomically(path, [&](const std::string& tmp) {
+    const cairo_status_t status = painter.write(ext, tmp);
+    require(status == CAIRO_STATUS_SUCCESS, "figure file '" + path + "'",
+            std::string("Cairo cannot write it (") + cairo_status_to_string(status) + ")",
+            "check that the folder is writable and the disk has space");
+  });
 }
 
 }  // namespace isokit::plot

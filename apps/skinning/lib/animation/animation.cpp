@@ -9,13 +9,12 @@
 #include <sstream>
 
 #include "isokit/core/error.h"
+#include "isokit/core/math.h"
 #include "isokit/skinning/deform.h"
 
 namespace isokit::skinning {
 
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 int parse_axis(const std::string& a, const std::string& where) {
   if (a == "x" || a == "X") return 0;

@@ -2,15 +2,15 @@
 #include "io/gltf_io.h"
 
 #include <algorithm>
-#include <atomic>
-#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <limits>
 #include <sstream>
 
+#include "isokit/core/atomic_file.h"
 #include "isokit/core/error.h"
 
 namespace isokit::skinning::gltf {
@@ -104,40 +104,6 @@ std::string extension(const std::string& path) {
   std::string ext = fs::path(path).extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
   return ext;
-}
-
-void write_file_atomic(const std::string& path, const std::function<void(std::ostream&)>& write) {
-  const fs::path target(path);
-  require(!target.filename().empty(), path, "no file name", "give a file path such as out/rig.glb");
-  fs::path dir = target.parent_path();
-  if (dir.empty()) dir = ".";
-  std::error_code ec;
-  require(fs::is_directory(dir, ec), path, "folder '" + dir.string() + "' does not exist",
-          "create the folder first or choose another path");
-  require(!fs::is_directory(target, ec), path, "is a folder", "give a file path");
-  static std::atomic<unsigned> counter{0};
-  const auto stamp = std::chrono::steady_clock::now().time_since_epoch().count();
-  const fs::path tmp = dir / ("." + target.filename().string() + ".tmp" + std::to_string(stamp) + "_" +
-                              std::to_string(counter.fetch_add(1)));
-  try {
-    {
-      std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-      require(out.is_open(), path, "cannot create a temporary file in '" + dir.string() + "'",
-              "check that the folder is writable");
-      write(out);
-      out.flush();
-      require(out.good(), path, "write failed", "check the free disk space and the folder's permissions");
-      out.close();
-      require(!out.fail(), path, "write failed when closing", "check the free disk space");
-    }
-    fs::rename(tmp, target, ec);
-    require(!ec, path, "cannot rename the temporary file over it (" + ec.message() + ")",
-            "check the permissions of the folder and of an existing file");
-  } catch (...) {
-    std::error_code ignored;
-    fs::remove(tmp, ignored);
-    throw;
-  }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -289,7 +255,7 @@ void Builder::write(const std::string& path, bool binary) {
   }
   std::string text = doc_.dump();
   if (!binary) {
-    write_file_atomic(
+    write_stream_atomically(
         path, [&](std::ostream& out) { out.write(text.data(), static_cast<std::streamsize>(text.size())); });
     return;
   }
@@ -299,7 +265,7 @@ void Builder::write(const std::string& path, bool binary) {
   require(total <= std::numeric_limits<std::uint32_t>::max(), path,
           "the GLB would be " + std::to_string(total) + " bytes, over the format's 4 GiB limit",
           "write fewer frames or vertices");
-  write_file_atomic(path, [&](std::ostream& out) {
+  write_stream_atomically(path, [&](std::ostream& out) {
     put_u32(out, kGlbMagic);
     put_u32(out, 2);
     put_u32(out, static_cast<std::uint32_t>(total));
@@ -317,142 +283,141 @@ void Builder::write(const std::string& path, bool binary) {
 // ---------------------------------------------------------------------------------------------
 // Reader
 
-Document read_document(const std::string& path) {
-  const std::vector<std::uint8_t> bytes = read_bytes(path, path);
-  const bool glb = bytes.size() >= 4 && get_u32(bytes.data()) == kGlbMagic;
-  require(glb || extension(path) != ".glb", path + ": GLB header", "missing the 'glTF' magic bytes",
-          "give a binary glTF 2.0 file (or rename a JSON glTF file to .gltf)");
-  Document doc;
+namespace {
+
+/// The JSON text and the binary chunk of a GLB container.
+struct GlbChunks {
   std::string text;
   const std::uint8_t* bin = nullptr;
   std::size_t bin_size = 0;
-  if (glb) {
-    require(bytes.size() >= 20, path + ": GLB header",
-            "file too short (" + std::to_string(bytes.size()) + " bytes)",
-            "the file is truncated; export it again");
-    const std::uint32_t version = get_u32(bytes.data() + 4);
-    const std::uint32_t length = get_u32(bytes.data() + 8);
-    require(version == 2, path + ": GLB header", "container version " + std::to_string(version) + " is not 2",
-            "export as glTF 2.0");
-    require(length <= bytes.size(), path + ": GLB header",
-            "declares " + std::to_string(length) + " bytes but the file has " + std::to_string(bytes.size()) +
-                " (truncated)",
-            "the file is incomplete; copy or export it again");
-    std::size_t at = 12;
-    bool first = true;
-    while (at + 8 <= length) {
-      const std::uint32_t chunk_len = get_u32(bytes.data() + at);
-      const std::uint32_t chunk_type = get_u32(bytes.data() + at + 4);
-      require(at + 8 + static_cast<std::size_t>(chunk_len) <= length,
-              path + ": GLB chunk at byte " + std::to_string(at), "runs past the end of the file",
-              "the file is truncated or corrupt; export it again");
-      const std::uint8_t* data = bytes.data() + at + 8;
-      if (first) {
-        require(chunk_type == kChunkJson, path + ": GLB", "first chunk is not JSON", "export a valid GLB");
-        text.assign(reinterpret_cast<const char*>(data), chunk_len);
-      } else if (chunk_type == kChunkBin && bin == nullptr) {
-        bin = data;
-        bin_size = chunk_len;
-      }
-      first = false;
-      at += 8 + pad4(chunk_len);
+};
+
+/// Splits a GLB file (`bytes` starts with the magic) into its chunks, checking the header.
+GlbChunks split_glb(const std::vector<std::uint8_t>& bytes, const std::string& path) {
+  GlbChunks chunks;
+  require(bytes.size() >= 20, path + ": GLB header",
+          "file too short (" + std::to_string(bytes.size()) + " bytes)",
+          "the file is truncated; export it again");
+  const std::uint32_t version = get_u32(bytes.data() + 4);
+  const std::uint32_t length = get_u32(bytes.data() + 8);
+  require(version == 2, path + ": GLB header", "container version " + std::to_string(version) + " is not 2",
+          "export as glTF 2.0");
+  require(length <= bytes.size(), path + ": GLB header",
+          "declares " + std::to_string(length) + " bytes but the file has " + std::to_string(bytes.size()) +
+              " (truncated)",
+          "the file is incomplete; copy or export it again");
+  std::size_t at = 12;
+  bool first = true;
+  while (at + 8 <= length) {
+    const std::uint32_t chunk_len = get_u32(bytes.data() + at);
+    const std::uint32_t chunk_type = get_u32(bytes.data() + at + 4);
+    require(at + 8 + static_cast<std::size_t>(chunk_len) <= length,
+            path + ": GLB chunk at byte " + std::to_string(at), "runs past the end of the file",
+            "the file is truncated or corrupt; export it again");
+    const std::uint8_t* data = bytes.data() + at + 8;
+    if (first) {
+      require(chunk_type == kChunkJson, path + ": GLB", "first chunk is not JSON", "export a valid GLB");
+      chunks.text.assign(reinterpret_cast<const char*>(data), chunk_len);
+    } else if (chunk_type == kChunkBin && chunks.bin == nullptr) {
+      chunks.bin = data;
+      chunks.bin_size = chunk_len;
     }
-    require(!first, path + ": GLB", "has no JSON chunk", "export a valid GLB");
-  } else {
-    text.assign(bytes.begin(), bytes.end());
+    first = false;
+    at += 8 + pad4(chunk_len);
   }
+  require(!first, path + ": GLB", "has no JSON chunk", "export a valid GLB");
+  return chunks;
+}
+
+/// Parses the glTF JSON and checks that it is a glTF 2.x object.
+json parse_gltf_json(const std::string& text, const std::string& path) {
+  json j;
   try {
-    doc.json = json::parse(text);
+    j = json::parse(text);
   } catch (const json::exception& e) {
     throw InputError(path + ": glTF JSON: " + e.what() + "; fix the file or export it again");
   }
-  require(doc.json.is_object(), path + ": glTF JSON", "top level is not an object", "give a glTF 2.0 file");
-  const json* asset = doc.json.contains("asset") ? &doc.json["asset"] : nullptr;
+  require(j.is_object(), path + ": glTF JSON", "top level is not an object", "give a glTF 2.0 file");
+  const json* asset = j.contains("asset") ? &j["asset"] : nullptr;
   const bool v2 = asset != nullptr && asset->is_object() && asset->contains("version") &&
                   (*asset)["version"].is_string() &&
                   (*asset)["version"].get<std::string>().rfind("2", 0) == 0;
   require(v2, path + ": asset.version", "is not \"2.x\"", "export as glTF 2.0");
-  if (doc.json.contains("buffers")) {
-    const json& buffers = doc.json["buffers"];
-    require(buffers.is_array(), path + ": buffers", "is not an array", "fix the file");
-    for (std::size_t i = 0; i < buffers.size(); ++i) {
-      const json& b = buffers[i];
-      const std::string what = path + ": buffers[" + std::to_string(i) + "]";
-      require(b.is_object() && b.contains("byteLength") && b["byteLength"].is_number_unsigned(), what,
-              "has no byteLength", "fix the file");
-      const std::size_t length = b["byteLength"].get<std::size_t>();
-      std::vector<std::uint8_t> data;
-      if (!b.contains("uri")) {
-        require(glb && i == 0 && bin != nullptr, what, "has no uri and there is no GLB binary chunk",
-                "fix the file");
-        data.assign(bin, bin + bin_size);
-      } else {
-        require(b["uri"].is_string(), what, "uri is not a string", "fix the file");
-        const std::string uri = b["uri"].get<std::string>();
-        if (uri.rfind("data:", 0) == 0) {
-          const std::size_t comma = uri.find(',');
-          require(comma != std::string::npos && uri.substr(0, comma).find(";base64") != std::string::npos,
-                  what, "data URI is not base64", "fix the file");
-          require(base64_decode(uri.substr(comma + 1), data), what, "invalid base64 data", "fix the file");
-        } else {
-          const fs::path file = fs::path(path).parent_path() / percent_decode(uri);
-          data = read_bytes(file.string(), what);
-        }
-      }
-      require(data.size() >= length, what,
-              "holds " + std::to_string(data.size()) + " bytes, fewer than its byteLength " +
-                  std::to_string(length),
-              "the buffer is truncated; export the file again");
-      doc.buffers.push_back(std::move(data));
-    }
-  }
-  return doc;
+  return j;
 }
 
-std::vector<double> read_accessor(const Document& doc, int index, int* components, const std::string& what) {
-  const json& j = doc.json;
-  const std::string item = what + " (accessor " + std::to_string(index) + ")";
-  require(j.contains("accessors") && index >= 0 && static_cast<std::size_t>(index) < j["accessors"].size(),
-          item, "does not exist", "fix the file");
-  const json& a = j["accessors"][static_cast<std::size_t>(index)];
-  const int ctype = a.value("componentType", 0);
-  const int csize = component_size(ctype);
-  const int comps = type_components(a.value("type", std::string()));
-  require(csize > 0 && comps > 0 && a.contains("count"), item, "has an unknown componentType or type",
-          "fix the file");
-  const std::size_t count = a["count"].get<std::size_t>();
-  const bool normalized = a.value("normalized", false);
-  *components = comps;
-  std::vector<double> out(count * static_cast<std::size_t>(comps), 0.0);
-  auto decode = [&](const std::uint8_t* p, int type, bool norm) -> double {
-    switch (type) {
-      case kByte: {
-        const auto v = static_cast<std::int8_t>(p[0]);
-        return norm ? std::max(v / 127.0, -1.0) : v;
-      }
-      case kUnsignedByte:
-        return norm ? p[0] / 255.0 : p[0];
-      case kShort: {
-        const auto v = static_cast<std::int16_t>(p[0] | (p[1] << 8));
-        return norm ? std::max(v / 32767.0, -1.0) : v;
-      }
-      case kUnsignedShort: {
-        const unsigned v = static_cast<unsigned>(p[0] | (p[1] << 8));
-        return norm ? v / 65535.0 : v;
-      }
-      case kUnsignedInt:
-        return get_u32(p);
-      default: {
-        const std::uint32_t u = get_u32(p);
-        float f;
-        std::memcpy(&f, &u, 4);
-        return f;
-      }
+/// The bytes of `buffers[i]`: the GLB binary chunk (no uri), a base64 data URI or a file beside
+/// `path`; at least its byteLength.
+std::vector<std::uint8_t> read_buffer(const json& b, std::size_t i, const std::string& path, bool glb,
+                                      const GlbChunks& chunks) {
+  const std::string what = path + ": buffers[" + std::to_string(i) + "]";
+  require(b.is_object() && b.contains("byteLength") && b["byteLength"].is_number_unsigned(), what,
+          "has no byteLength", "fix the file");
+  const std::size_t length = b["byteLength"].get<std::size_t>();
+  std::vector<std::uint8_t> data;
+  if (!b.contains("uri")) {
+    require(glb && i == 0 && chunks.bin != nullptr, what, "has no uri and there is no GLB binary chunk",
+            "fix the file");
+    data.assign(chunks.bin, chunks.bin + chunks.bin_size);
+  } else {
+    require(b["uri"].is_string(), what, "uri is not a string", "fix the file");
+    const std::string uri = b["uri"].get<std::string>();
+    if (uri.rfind("data:", 0) == 0) {
+      const std::size_t comma = uri.find(',');
+      require(comma != std::string::npos && uri.substr(0, comma).find(";base64") != std::string::npos, what,
+              "data URI is not base64", "fix the file");
+      require(base64_decode(uri.substr(comma + 1), data), what, "invalid base64 data", "fix the file");
+    } else {
+      const fs::path file = fs::path(path).parent_path() / percent_decode(uri);
+      data = read_bytes(file.string(), what);
     }
-  };
-  // Reads `n` elements of `c` components from a view into `dst` (element-major).
-  auto read_view = [&](int view_index, std::size_t byte_offset, std::size_t n, int type, int c,
-                       const std::string& sub, const std::function<void(std::size_t, int, double)>& put) {
+  }
+  require(
+      data.size() >= length, what,
+      "holds " + std::to_string(data.size()) + " bytes, fewer than its byteLength " + std::to_string(length),
+      "the buffer is truncated; export the file again");
+  return data;
+}
+
+/// One component at `p` of glTF component type `type` as a double (normalized integers mapped to
+/// [0, 1] / [-1, 1] when `norm`).
+double decode_component(const std::uint8_t* p, int type, bool norm) {
+  switch (type) {
+    case kByte: {
+      const auto v = static_cast<std::int8_t>(p[0]);
+      return norm ? std::max(v / 127.0, -1.0) : v;
+    }
+    case kUnsignedByte:
+      return norm ? p[0] / 255.0 : p[0];
+    case kShort: {
+      const auto v = static_cast<std::int16_t>(p[0] | (p[1] << 8));
+      return norm ? std::max(v / 32767.0, -1.0) : v;
+    }
+    case kUnsignedShort: {
+      const unsigned v = static_cast<unsigned>(p[0] | (p[1] << 8));
+      return norm ? v / 65535.0 : v;
+    }
+    case kUnsignedInt:
+      return get_u32(p);
+    default: {
+      const std::uint32_t u = get_u32(p);
+      float f;
+      std::memcpy(&f, &u, 4);
+      return f;
+    }
+  }
+}
+
+/// Reads the buffer views of one accessor; errors name `item`.
+struct AccessorReader {
+  const Document& doc;
+  const std::string& item;
+  bool normalized;
+
+  /// Reads `n` elements of `c` components from a view into `put(element, component, value)`.
+  void read_view(int view_index, std::size_t byte_offset, std::size_t n, int type, int c,
+                 const std::string& sub, const std::function<void(std::size_t, int, double)>& put) const {
+    const json& j = doc.json;
     require(j.contains("bufferViews") && view_index >= 0 &&
                 static_cast<std::size_t>(view_index) < j["bufferViews"].size(),
             item + sub, "buffer view " + std::to_string(view_index) + " does not exist", "fix the file");
@@ -474,15 +439,12 @@ std::vector<double> read_accessor(const Document& doc, int index, int* component
     for (std::size_t e = 0; e < n; ++e)
       for (int k = 0; k < c; ++k)
         put(e, k,
-            decode(data.data() + begin + e * stride + static_cast<std::size_t>(k * cs), type, normalized));
-  };
-  if (a.contains("bufferView"))
-    read_view(a["bufferView"].get<int>(), a.value("byteOffset", std::size_t{0}), count, ctype, comps, "",
-              [&](std::size_t e, int k, double x) {
-                out[e * static_cast<std::size_t>(comps) + static_cast<std::size_t>(k)] = x;
-              });
-  if (a.contains("sparse")) {
-    const json& s = a["sparse"];
+            decode_component(data.data() + begin + e * stride + static_cast<std::size_t>(k * cs), type,
+                             normalized));
+  }
+
+  /// Applies the accessor's sparse substitution `s` to `out` (`count` elements of `comps`).
+  void read_sparse(const json& s, std::size_t count, int ctype, int comps, std::vector<double>& out) const {
     const std::size_t n = s.value("count", std::size_t{0});
     std::vector<std::size_t> idx(n);
     const json& si = s["indices"];
@@ -498,6 +460,52 @@ std::vector<double> read_accessor(const Document& doc, int index, int* component
                 out[idx[e] * static_cast<std::size_t>(comps) + static_cast<std::size_t>(k)] = x;
               });
   }
+};
+
+}  // namespace
+
+Document read_document(const std::string& path) {
+  const std::vector<std::uint8_t> bytes = read_bytes(path, path);
+  const bool glb = bytes.size() >= 4 && get_u32(bytes.data()) == kGlbMagic;
+  require(glb || extension(path) != ".glb", path + ": GLB header", "missing the 'glTF' magic bytes",
+          "give a binary glTF 2.0 file (or rename a JSON glTF file to .gltf)");
+  Document doc;
+  GlbChunks chunks;
+  if (glb)
+    chunks = split_glb(bytes, path);
+  else
+    chunks.text.assign(bytes.begin(), bytes.end());
+  doc.json = parse_gltf_json(chunks.text, path);
+  if (doc.json.contains("buffers")) {
+    const json& buffers = doc.json["buffers"];
+    require(buffers.is_array(), path + ": buffers", "is not an array", "fix the file");
+    for (std::size_t i = 0; i < buffers.size(); ++i)
+      doc.buffers.push_back(read_buffer(buffers[i], i, path, glb, chunks));
+  }
+  return doc;
+}
+
+std::vector<double> read_accessor(const Document& doc, int index, int* components, const std::string& what) {
+  const json& j = doc.json;
+  const std::string item = what + " (accessor " + std::to_string(index) + ")";
+  require(j.contains("accessors") && index >= 0 && static_cast<std::size_t>(index) < j["accessors"].size(),
+          item, "does not exist", "fix the file");
+  const json& a = j["accessors"][static_cast<std::size_t>(index)];
+  const int ctype = a.value("componentType", 0);
+  const int csize = component_size(ctype);
+  const int comps = type_components(a.value("type", std::string()));
+  require(csize > 0 && comps > 0 && a.contains("count"), item, "has an unknown componentType or type",
+          "fix the file");
+  const std::size_t count = a["count"].get<std::size_t>();
+  const AccessorReader reader{doc, item, a.value("normalized", false)};
+  *components = comps;
+  std::vector<double> out(count * static_cast<std::size_t>(comps), 0.0);
+  if (a.contains("bufferView"))
+    reader.read_view(a["bufferView"].get<int>(), a.value("byteOffset", std::size_t{0}), count, ctype, comps,
+                     "", [&](std::size_t e, int k, double x) {
+                       out[e * static_cast<std::size_t>(comps) + static_cast<std::size_t>(k)] = x;
+                     });
+  if (a.contains("sparse")) reader.read_sparse(a["sparse"], count, ctype, comps, out);
   return out;
 }
 

@@ -1,15 +1,12 @@
 // SPDX-License-Identifier: MIT
 /// \file
 /// Private glTF 2.0 helpers of the rig I/O: a document builder with one binary buffer (written as
-/// .glb or as .gltf with an embedded base64 buffer), the atomic file writer shared by every
-/// writer, and a small reader of the glTF container and accessors used to check files before
-/// assimp reads them.
+/// .glb or as .gltf with an embedded base64 buffer) and a small reader of the glTF container and
+/// accessors used to check files before assimp reads them.
 #pragma once
 
 #include <cstddef>
 #include <cstdint>
-#include <functional>
-#include <iosfwd>
 #include <string>
 #include <vector>
 
@@ -34,10 +31,6 @@ int type_components(const std::string& type);
 
 /// Lower-case extension of `path` including the dot (".glb"), empty when none.
 std::string extension(const std::string& path);
-
-/// Writes a file through a temporary file in the same folder renamed over `path` at the end; on
-/// any error the temporary file is removed and InputError names `path`.
-void write_file_atomic(const std::string& path, const std::function<void(std::ostream&)>& write);
 
 /// A glTF document under construction with a single binary buffer (every view 4-byte aligned).
 class Builder {

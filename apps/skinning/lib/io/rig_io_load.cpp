@@ -9,7 +9,6 @@
 #include <cstring>
 #include <filesystem>
 #include <map>
-#include <ostream>
 #include <random>
 #include <set>
 #include <unordered_map>
@@ -20,6 +19,7 @@
 #include <assimp/Importer.hpp>
 
 #include "io/gltf_io.h"
+#include "isokit/core/atomic_file.h"
 #include "isokit/core/error.h"
 #include "isokit/skinning/rig_io.h"
 
@@ -136,14 +136,9 @@ std::string gltf_node_name(const json& nodes, std::size_t i) {
   return "nodes[" + std::to_string(i) + "]";
 }
 
-GltfInfo check_gltf(const std::string& path, LoadReport& report) {
-  const gltf::Document doc = gltf::read_document(path);
-  const json& j = doc.json;
-  GltfInfo info;
-  const json empty = json::array();
-  const json& nodes = j.contains("nodes") && j["nodes"].is_array() ? j["nodes"] : empty;
-  const json& skins = j.contains("skins") && j["skins"].is_array() ? j["skins"] : empty;
-  const json& meshes = j.contains("meshes") && j["meshes"].is_array() ? j["meshes"] : empty;
+/// Checks every skin's joint indices and inverse bind matrices; collects the joint names.
+void check_skins(const gltf::Document& doc, const std::string& path, const json& nodes, const json& skins,
+                 GltfInfo& info) {
   std::set<std::string> names;
   for (std::size_t s = 0; s < skins.size(); ++s) {
     const std::string what = path + ": skins[" + std::to_string(s) + "]";
@@ -169,6 +164,48 @@ GltfInfo check_gltf(const std::string& path, LoadReport& report) {
                 "fix the bind pose and export again");
     }
   }
+}
+
+/// Checks one skinned primitive: finite positions, JOINTS_n / WEIGHTS_n in pairs of VEC4 with
+/// non-negative weights on joints below the skin's `njoints`.
+void check_skinned_primitive(const gltf::Document& doc, const json& attrs, const std::string& where,
+                             std::size_t njoints) {
+  if (attrs.contains("POSITION")) {
+    int comps = 0;
+    const std::vector<double> pos =
+        gltf::read_accessor(doc, attrs["POSITION"].get<int>(), &comps, where + " POSITION");
+    for (std::size_t i = 0; i < pos.size(); ++i)
+      require(std::isfinite(pos[i]), where + " vertex " + std::to_string(i / 3), "position is not finite",
+              "fix the mesh and export again");
+  }
+  for (int set = 0;; ++set) {
+    const std::string jn = "JOINTS_" + std::to_string(set);
+    const std::string wn = "WEIGHTS_" + std::to_string(set);
+    if (!attrs.contains(jn) && !attrs.contains(wn)) break;
+    require(attrs.contains(jn) && attrs.contains(wn), where, jn + " and " + wn + " must come together",
+            "fix the file or export it again");
+    int jc = 0;
+    int wc = 0;
+    const std::vector<double> jv = gltf::read_accessor(doc, attrs[jn].get<int>(), &jc, where + " " + jn);
+    const std::vector<double> wv = gltf::read_accessor(doc, attrs[wn].get<int>(), &wc, where + " " + wn);
+    require(jc == 4 && wc == 4 && jv.size() == wv.size(), where,
+            jn + "/" + wn + " are not VEC4 of equal count", "fix the file or export it again");
+    for (std::size_t i = 0; i < wv.size(); ++i) {
+      const std::string vtx = where + " vertex " + std::to_string(i / 4);
+      require(std::isfinite(wv[i]) && wv[i] >= 0, vtx, wn + " has a negative or non-finite weight",
+              "fix the skin weights and export again");
+      require(wv[i] == 0 || jv[i] < static_cast<double>(njoints), vtx,
+              jn + " names joint " + format_number(jv[i]) + " but the skin has " + std::to_string(njoints) +
+                  " joints",
+              "fix the skin (every weighted joint index must be below the skin's joint count)");
+    }
+  }
+}
+
+/// Checks every node that has a mesh and a skin, and each of its mesh's primitives.
+void check_skinned_nodes(const gltf::Document& doc, const std::string& path, const json& nodes,
+                         const json& skins, const json& meshes, LoadReport& report) {
+  const json empty = json::array();
   for (std::size_t n = 0; n < nodes.size(); ++n) {
     const json& node = nodes[n];
     if (!node.contains("mesh") || !node.contains("skin")) continue;
@@ -186,38 +223,21 @@ GltfInfo check_gltf(const std::string& path, LoadReport& report) {
     for (std::size_t p = 0; p < prims.size(); ++p) {
       const json& attrs = prims[p].value("attributes", json::object());
       const std::string where = path + ": mesh " + quote(mesh_name) + " primitive " + std::to_string(p);
-      if (attrs.contains("POSITION")) {
-        int comps = 0;
-        const std::vector<double> pos =
-            gltf::read_accessor(doc, attrs["POSITION"].get<int>(), &comps, where + " POSITION");
-        for (std::size_t i = 0; i < pos.size(); ++i)
-          require(std::isfinite(pos[i]), where + " vertex " + std::to_string(i / 3), "position is not finite",
-                  "fix the mesh and export again");
-      }
-      for (int set = 0;; ++set) {
-        const std::string jn = "JOINTS_" + std::to_string(set);
-        const std::string wn = "WEIGHTS_" + std::to_string(set);
-        if (!attrs.contains(jn) && !attrs.contains(wn)) break;
-        require(attrs.contains(jn) && attrs.contains(wn), where, jn + " and " + wn + " must come together",
-                "fix the file or export it again");
-        int jc = 0;
-        int wc = 0;
-        const std::vector<double> jv = gltf::read_accessor(doc, attrs[jn].get<int>(), &jc, where + " " + jn);
-        const std::vector<double> wv = gltf::read_accessor(doc, attrs[wn].get<int>(), &wc, where + " " + wn);
-        require(jc == 4 && wc == 4 && jv.size() == wv.size(), where,
-                jn + "/" + wn + " are not VEC4 of equal count", "fix the file or export it again");
-        for (std::size_t i = 0; i < wv.size(); ++i) {
-          const std::string vtx = where + " vertex " + std::to_string(i / 4);
-          require(std::isfinite(wv[i]) && wv[i] >= 0, vtx, wn + " has a negative or non-finite weight",
-                  "fix the skin weights and export again");
-          require(wv[i] == 0 || jv[i] < static_cast<double>(njoints), vtx,
-                  jn + " names joint " + format_number(jv[i]) + " but the skin has " +
-                      std::to_string(njoints) + " joints",
-                  "fix the skin (every weighted joint index must be below the skin's joint count)");
-        }
-      }
+      check_skinned_primitive(doc, attrs, where, njoints);
     }
   }
+}
+
+GltfInfo check_gltf(const std::string& path, LoadReport& report) {
+  const gltf::Document doc = gltf::read_document(path);
+  const json& j = doc.json;
+  GltfInfo info;
+  const json empty = json::array();
+  const json& nodes = j.contains("nodes") && j["nodes"].is_array() ? j["nodes"] : empty;
+  const json& skins = j.contains("skins") && j["skins"].is_array() ? j["skins"] : empty;
+  const json& meshes = j.contains("meshes") && j["meshes"].is_array() ? j["meshes"] : empty;
+  check_skins(doc, path, nodes, skins, info);
+  check_skinned_nodes(doc, path, nodes, skins, meshes, report);
   for (const json& skin : skins)
     if (!skin.contains("inverseBindMatrices")) {
       info.patched = patch_for_assimp(doc, report);
@@ -457,6 +477,14 @@ struct MeshUse {
   std::vector<int> bone_joint_node;  ///< per aiBone: node index
 };
 
+/// The selected meshes merged, before welding: the file's vertices (in rig rest space), their
+/// weights and the triangles.
+struct FileMesh {
+  std::vector<Eigen::Vector3f> pos;
+  std::vector<std::vector<std::pair<int, float>>> w;
+  std::vector<Eigen::Vector3i> tris;
+};
+
 class Loader {
  public:
   Loader(const std::string& path, const LoadOptions& options, LoadReport& report)
@@ -468,9 +496,22 @@ class Loader {
   int node_named(const std::string& name, const std::string& what) const;
   void select_meshes();
   void bind_pose();
+  void bind_pose_unskinned();
+  std::vector<int> unskinned_skeleton() const;
+  void bind_mesh(MeshUse& m, std::map<int, std::string>& bind_source);
   void build_joints();
   void build_mesh();
+  void append_mesh(const MeshUse& m, bool weights, FileMesh& file);
+  std::vector<int> append_triangles(const MeshUse& m, FileMesh& file) const;
+  void append_weights(const MeshUse& m, const std::vector<int>& local_to_out, FileMesh& file) const;
+  std::vector<int> weld_file_mesh(const FileMesh& file);
+  void weld_weights(const FileMesh& file, const std::vector<int>& first);
   void build_clips();
+  std::vector<char> animated_nodes() const;
+  Clip sample_clip(const std::string& name, const std::vector<const aiNodeAnim*>& channel,
+                   const std::vector<char>& relevant, const std::vector<Trs>& rest_trs, double last,
+                   double tps) const;
+  std::vector<Affine> joint_pose(const std::vector<Affine>& local, const std::vector<Affine>& world) const;
 
   const std::string& path_;
   const LoadOptions& options_;
@@ -551,92 +592,102 @@ void Loader::select_meshes() {
 
 void Loader::bind_pose() {
   if (!skinned_) {
-    // A mesh and a skeleton without weights: the skeleton is the glTF skins' joints, or else the
-    // nodes that are neither meshes, cameras, lights nor ancestors of meshes, and that are
-    // animated or chained to another such node.
-    std::vector<int> skeleton;
-    for (const std::string& name : gltf_.skin_joint_names) {
-      const auto it = nodes_.by_name.find(name);
-      if (it != nodes_.by_name.end() && it->second.size() == 1) skeleton.push_back(it->second.front());
-    }
-    if (skeleton.empty()) {
-      const std::size_t n = nodes_.list.size();
-      std::vector<char> excluded(n, 0);
-      std::set<std::string> special;
-      for (unsigned c = 0; c < scene_->mNumCameras; ++c) special.insert(scene_->mCameras[c]->mName.C_Str());
-      for (unsigned l = 0; l < scene_->mNumLights; ++l) special.insert(scene_->mLights[l]->mName.C_Str());
-      for (std::size_t i = 0; i < n; ++i) {
-        const Node& nd = nodes_.list[i];
-        if (nd.ai->mNumMeshes > 0)
-          for (int p = static_cast<int>(i); p >= 0; p = nodes_.list[static_cast<std::size_t>(p)].parent)
-            excluded[static_cast<std::size_t>(p)] = 1;
-        if (special.count(nd.name) || nd.parent < 0) excluded[i] = 1;
-      }
-      std::set<std::string> animated;
-      for (unsigned a = 0; a < scene_->mNumAnimations; ++a)
-        for (unsigned c = 0; c < scene_->mAnimations[a]->mNumChannels; ++c)
-          animated.insert(scene_->mAnimations[a]->mChannels[c]->mNodeName.C_Str());
-      std::vector<char> chained(n, 0);
-      for (std::size_t i = 0; i < n; ++i) {
-        const int p = nodes_.list[i].parent;
-        if (!excluded[i] && p >= 0 && !excluded[static_cast<std::size_t>(p)])
-          chained[i] = chained[static_cast<std::size_t>(p)] = 1;
-      }
-      for (std::size_t i = 0; i < n; ++i)
-        if (!excluded[i] && (chained[i] || animated.count(nodes_.list[i].name)))
-          skeleton.push_back(static_cast<int>(i));
-    }
-    require(!skeleton.empty(), path_, "no skin: isokit-skin needs a mesh with a skeleton",
-            "export the character with its armature and skin weights (glTF: a skin on the mesh node)");
-    for (int node : skeleton) bind_world_[node] = nodes_.list[static_cast<std::size_t>(node)].world;
-    for (MeshUse& m : meshes_) m.to_scene = nodes_.list[static_cast<std::size_t>(m.node)].world;
-    report_.warnings.push_back(
-        "the file has no skin weights: loaded with empty weights (heat weights will be computed)");
+    bind_pose_unskinned();
     return;
   }
   std::map<int, std::string> bind_source;
-  for (MeshUse& m : meshes_) {
-    const aiMesh* mesh = m.mesh;
-    std::vector<Affine> offsets(mesh->mNumBones);
-    int top = -1;
-    for (unsigned b = 0; b < mesh->mNumBones; ++b) {
-      const aiBone* bone = mesh->mBones[b];
-      const std::string what = path_ + ": mesh " + quote(m.name) + " bone " + quote(bone->mName.C_Str());
-      const int node = node_named(bone->mName.C_Str(), what);
-      m.bone_joint_node.push_back(node);
-      require(is_affine(bone->mOffsetMatrix), what, "inverse bind matrix is projective", "fix the bind pose");
-      offsets[b] = to_affine(bone->mOffsetMatrix);
-      require(offsets[b].matrix().allFinite(), what, "inverse bind matrix is not finite",
-              "fix the bind pose");
-      require(std::abs(offsets[b].linear().determinant()) > 1e-12, what, "inverse bind matrix is singular",
-              "fix the bind pose");
-      if (top < 0 ||
-          nodes_.list[static_cast<std::size_t>(node)].depth <
-              nodes_.list[static_cast<std::size_t>(m.bone_joint_node[static_cast<std::size_t>(top)])].depth)
-        top = static_cast<int>(b);
-    }
-    // The mesh's bind-shape transform: where its top bone's node is now, times its inverse bind.
-    const int top_node = m.bone_joint_node[static_cast<std::size_t>(top)];
-    m.to_scene =
-        nodes_.list[static_cast<std::size_t>(top_node)].world * offsets[static_cast<std::size_t>(top)];
-    // World times inverse bind is the identity up to the file's float rounding in the usual case
-    // (glTF, and FBX/COLLADA meshes at the scene origin): keep the file's positions bit-exact then.
-    const double length = nodes_.list[static_cast<std::size_t>(top_node)].world.translation().norm();
-    if (nearly_identity(m.to_scene, length)) m.to_scene = Affine::Identity();
-    for (unsigned b = 0; b < mesh->mNumBones; ++b) {
-      const int node = m.bone_joint_node[b];
-      const Affine world = m.to_scene * offsets[b].inverse(Eigen::Affine);
-      const auto it = bind_world_.find(node);
-      if (it == bind_world_.end()) {
-        bind_world_[node] = world;
-        bind_source[node] = m.name;
-      } else {
-        require(
-            nearly_equal(it->second, world),
-            path_ + ": joint " + quote(nodes_.list[static_cast<std::size_t>(node)].name),
-            "meshes " + quote(bind_source[node]) + " and " + quote(m.name) + " bind it at different poses",
-            "load one mesh (LoadOptions::mesh) or re-export the meshes with one bind pose");
-      }
+  for (MeshUse& m : meshes_) bind_mesh(m, bind_source);
+}
+
+void Loader::bind_pose_unskinned() {
+  // A mesh and a skeleton without weights: the skeleton is the glTF skins' joints, or else
+  // unskinned_skeleton().
+  std::vector<int> skeleton;
+  for (const std::string& name : gltf_.skin_joint_names) {
+    const auto it = nodes_.by_name.find(name);
+    if (it != nodes_.by_name.end() && it->second.size() == 1) skeleton.push_back(it->second.front());
+  }
+  if (skeleton.empty()) skeleton = unskinned_skeleton();
+  require(!skeleton.empty(), path_, "no skin: isokit-skin needs a mesh with a skeleton",
+          "export the character with its armature and skin weights (glTF: a skin on the mesh node)");
+  for (int node : skeleton) bind_world_[node] = nodes_.list[static_cast<std::size_t>(node)].world;
+  for (MeshUse& m : meshes_) m.to_scene = nodes_.list[static_cast<std::size_t>(m.node)].world;
+  report_.warnings.push_back(
+      "the file has no skin weights: loaded with empty weights (heat weights will be computed)");
+}
+
+/// The nodes that are neither meshes, cameras, lights, roots nor ancestors of meshes, and that are
+/// animated or chained to another such node.
+std::vector<int> Loader::unskinned_skeleton() const {
+  std::vector<int> skeleton;
+  const std::size_t n = nodes_.list.size();
+  std::vector<char> excluded(n, 0);
+  std::set<std::string> special;
+  for (unsigned c = 0; c < scene_->mNumCameras; ++c) special.insert(scene_->mCameras[c]->mName.C_Str());
+  for (unsigned l = 0; l < scene_->mNumLights; ++l) special.insert(scene_->mLights[l]->mName.C_Str());
+  for (std::size_t i = 0; i < n; ++i) {
+    const Node& nd = nodes_.list[i];
+    if (nd.ai->mNumMeshes > 0)
+      for (int p = static_cast<int>(i); p >= 0; p = nodes_.list[static_cast<std::size_t>(p)].parent)
+        excluded[static_cast<std::size_t>(p)] = 1;
+    if (special.count(nd.name) || nd.parent < 0) excluded[i] = 1;
+  }
+  std::set<std::string> animated;
+  for (unsigned a = 0; a < scene_->mNumAnimations; ++a)
+    for (unsigned c = 0; c < scene_->mAnimations[a]->mNumChannels; ++c)
+      animated.insert(scene_->mAnimations[a]->mChannels[c]->mNodeName.C_Str());
+  std::vector<char> chained(n, 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    const int p = nodes_.list[i].parent;
+    if (!excluded[i] && p >= 0 && !excluded[static_cast<std::size_t>(p)])
+      chained[i] = chained[static_cast<std::size_t>(p)] = 1;
+  }
+  for (std::size_t i = 0; i < n; ++i)
+    if (!excluded[i] && (chained[i] || animated.count(nodes_.list[i].name)))
+      skeleton.push_back(static_cast<int>(i));
+  return skeleton;
+}
+
+/// The bind pose of one skinned mesh: its bones' nodes, its bind-shape transform and the bones'
+/// bind world transforms (which must agree between meshes; `bind_source` names the first mesh).
+void Loader::bind_mesh(MeshUse& m, std::map<int, std::string>& bind_source) {
+  const aiMesh* mesh = m.mesh;
+  std::vector<Affine> offsets(mesh->mNumBones);
+  int top = -1;
+  for (unsigned b = 0; b < mesh->mNumBones; ++b) {
+    const aiBone* bone = mesh->mBones[b];
+    const std::string what = path_ + ": mesh " + quote(m.name) + " bone " + quote(bone->mName.C_Str());
+    const int node = node_named(bone->mName.C_Str(), what);
+    m.bone_joint_node.push_back(node);
+    require(is_affine(bone->mOffsetMatrix), what, "inverse bind matrix is projective", "fix the bind pose");
+    offsets[b] = to_affine(bone->mOffsetMatrix);
+    require(offsets[b].matrix().allFinite(), what, "inverse bind matrix is not finite", "fix the bind pose");
+    require(std::abs(offsets[b].linear().determinant()) > 1e-12, what, "inverse bind matrix is singular",
+            "fix the bind pose");
+    if (top < 0 ||
+        nodes_.list[static_cast<std::size_t>(node)].depth <
+            nodes_.list[static_cast<std::size_t>(m.bone_joint_node[static_cast<std::size_t>(top)])].depth)
+      top = static_cast<int>(b);
+  }
+  // The mesh's bind-shape transform: where its top bone's node is now, times its inverse bind.
+  const int top_node = m.bone_joint_node[static_cast<std::size_t>(top)];
+  m.to_scene = nodes_.list[static_cast<std::size_t>(top_node)].world * offsets[static_cast<std::size_t>(top)];
+  // World times inverse bind is the identity up to the file's float rounding in the usual case
+  // (glTF, and FBX/COLLADA meshes at the scene origin): keep the file's positions bit-exact then.
+  const double length = nodes_.list[static_cast<std::size_t>(top_node)].world.translation().norm();
+  if (nearly_identity(m.to_scene, length)) m.to_scene = Affine::Identity();
+  for (unsigned b = 0; b < mesh->mNumBones; ++b) {
+    const int node = m.bone_joint_node[b];
+    const Affine world = m.to_scene * offsets[b].inverse(Eigen::Affine);
+    const auto it = bind_world_.find(node);
+    if (it == bind_world_.end()) {
+      bind_world_[node] = world;
+      bind_source[node] = m.name;
+    } else {
+      require(nearly_equal(it->second, world),
+              path_ + ": joint " + quote(nodes_.list[static_cast<std::size_t>(node)].name),
+              "meshes " + quote(bind_source[node]) + " and " + quote(m.name) + " bind it at different poses",
+              "load one mesh (LoadOptions::mesh) or re-export the meshes with one bind pose");
     }
   }
 }
@@ -704,74 +755,98 @@ void Loader::build_joints() {
 
 void Loader::build_mesh() {
   const bool weights = skinned_ && !options_.ignore_weights;
-  std::vector<Eigen::Vector3f> out_pos;
-  std::vector<std::vector<std::pair<int, float>>> out_w;
-  std::vector<Eigen::Vector3i> out_tris;
+  FileMesh file;
   rig_.output.primitive_offsets = {0};
-  for (const MeshUse& m : meshes_) {
-    const aiMesh* mesh = m.mesh;
-    std::vector<int> local_to_out(mesh->mNumVertices, -1);
-    for (unsigned f = 0; f < mesh->mNumFaces; ++f) {
-      const aiFace& face = mesh->mFaces[f];
-      if (face.mNumIndices != 3) continue;
-      Eigen::Vector3i t;
-      for (int k = 0; k < 3; ++k) {
-        const unsigned v = face.mIndices[k];
-        require(v < mesh->mNumVertices, path_ + ": mesh " + quote(m.name) + " face " + std::to_string(f),
-                "vertex index out of range", "fix the mesh");
-        if (local_to_out[v] < 0) {
-          const Eigen::Vector3d p =
-              m.to_scene * Eigen::Vector3d(mesh->mVertices[v].x, mesh->mVertices[v].y, mesh->mVertices[v].z);
-          require(p.allFinite(), path_ + ": mesh " + quote(m.name) + " vertex " + std::to_string(v),
-                  "position is not finite", "fix the mesh and export again");
-          local_to_out[v] = static_cast<int>(out_pos.size());
-          out_pos.push_back(p.cast<float>());
-        }
-        t[k] = local_to_out[v];
+  for (const MeshUse& m : meshes_) append_mesh(m, weights, file);
+  const std::size_t nout = file.pos.size();
+  const std::vector<int> first = weld_file_mesh(file);
+  const int nw = static_cast<int>(first.size());
+  if (weights) weld_weights(file, first);
+  report_.meshes = static_cast<int>(meshes_.size());
+  report_.file_vertices = static_cast<int>(nout);
+  report_.welded_vertices = nw;
+  report_.weights_from_file = weights;
+}
+
+/// Appends one mesh's triangles, used vertices and (when `weights`) their weights to `file`.
+void Loader::append_mesh(const MeshUse& m, bool weights, FileMesh& file) {
+  const std::vector<int> local_to_out = append_triangles(m, file);
+  const int unused = static_cast<int>(std::count(local_to_out.begin(), local_to_out.end(), -1));
+  if (unused > 0)
+    report_.warnings.push_back("mesh " + quote(m.name) + ": " + std::to_string(unused) +
+                               " vertices used by no triangle were dropped");
+  rig_.output.primitive_offsets.push_back(static_cast<int>(file.tris.size()));
+  file.w.resize(file.pos.size());
+  if (weights) append_weights(m, local_to_out, file);
+}
+
+/// Appends the triangles of `m` and the vertices they use (in rig rest space); returns the
+/// mesh's vertex -> output vertex map (-1: unused).
+std::vector<int> Loader::append_triangles(const MeshUse& m, FileMesh& file) const {
+  const aiMesh* mesh = m.mesh;
+  std::vector<int> local_to_out(mesh->mNumVertices, -1);
+  for (unsigned f = 0; f < mesh->mNumFaces; ++f) {
+    const aiFace& face = mesh->mFaces[f];
+    if (face.mNumIndices != 3) continue;
+    Eigen::Vector3i t;
+    for (int k = 0; k < 3; ++k) {
+      const unsigned v = face.mIndices[k];
+      require(v < mesh->mNumVertices, path_ + ": mesh " + quote(m.name) + " face " + std::to_string(f),
+              "vertex index out of range", "fix the mesh");
+      if (local_to_out[v] < 0) {
+        const Eigen::Vector3d p =
+            m.to_scene * Eigen::Vector3d(mesh->mVertices[v].x, mesh->mVertices[v].y, mesh->mVertices[v].z);
+        require(p.allFinite(), path_ + ": mesh " + quote(m.name) + " vertex " + std::to_string(v),
+                "position is not finite", "fix the mesh and export again");
+        local_to_out[v] = static_cast<int>(file.pos.size());
+        file.pos.push_back(p.cast<float>());
       }
-      out_tris.push_back(t);
+      t[k] = local_to_out[v];
     }
-    const int unused = static_cast<int>(std::count(local_to_out.begin(), local_to_out.end(), -1));
-    if (unused > 0)
-      report_.warnings.push_back("mesh " + quote(m.name) + ": " + std::to_string(unused) +
-                                 " vertices used by no triangle were dropped");
-    rig_.output.primitive_offsets.push_back(static_cast<int>(out_tris.size()));
-    out_w.resize(out_pos.size());
-    if (!weights) continue;
-    for (unsigned b = 0; b < mesh->mNumBones; ++b) {
-      const aiBone* bone = mesh->mBones[b];
-      const int joint = node_joint_[static_cast<std::size_t>(m.bone_joint_node[b])];
-      for (unsigned k = 0; k < bone->mNumWeights; ++k) {
-        const aiVertexWeight& vw = bone->mWeights[k];
-        const std::string what =
-            path_ + ": mesh " + quote(m.name) + " vertex " + std::to_string(vw.mVertexId);
-        require(vw.mVertexId < mesh->mNumVertices, what,
-                "bone " + quote(bone->mName.C_Str()) + " weights a missing vertex",
-                "fix the skin and export again");
-        require(std::isfinite(vw.mWeight) && vw.mWeight >= 0, what,
-                "weight of bone " + quote(bone->mName.C_Str()) + " is negative or not finite",
-                "fix the skin weights and export again");
-        const int o = local_to_out[vw.mVertexId];
-        if (o >= 0 && vw.mWeight > 0) out_w[static_cast<std::size_t>(o)].push_back({joint, vw.mWeight});
-      }
-    }
-    for (unsigned v = 0; v < mesh->mNumVertices; ++v) {
-      const int o = local_to_out[v];
-      require(
-          o < 0 || !out_w[static_cast<std::size_t>(o)].empty(),
-          path_ + ": mesh " + quote(m.name) + " vertex " + std::to_string(v), "has no skin weight",
-          "weight every vertex in the DCC tool, or set LoadOptions::ignore_weights to compute heat weights");
+    file.tris.push_back(t);
+  }
+  return local_to_out;
+}
+
+/// Appends the bone weights of `m` to its output vertices; every used vertex needs one.
+void Loader::append_weights(const MeshUse& m, const std::vector<int>& local_to_out, FileMesh& file) const {
+  const aiMesh* mesh = m.mesh;
+  for (unsigned b = 0; b < mesh->mNumBones; ++b) {
+    const aiBone* bone = mesh->mBones[b];
+    const int joint = node_joint_[static_cast<std::size_t>(m.bone_joint_node[b])];
+    for (unsigned k = 0; k < bone->mNumWeights; ++k) {
+      const aiVertexWeight& vw = bone->mWeights[k];
+      const std::string what = path_ + ": mesh " + quote(m.name) + " vertex " + std::to_string(vw.mVertexId);
+      require(vw.mVertexId < mesh->mNumVertices, what,
+              "bone " + quote(bone->mName.C_Str()) + " weights a missing vertex",
+              "fix the skin and export again");
+      require(std::isfinite(vw.mWeight) && vw.mWeight >= 0, what,
+              "weight of bone " + quote(bone->mName.C_Str()) + " is negative or not finite",
+              "fix the skin weights and export again");
+      const int o = local_to_out[vw.mVertexId];
+      if (o >= 0 && vw.mWeight > 0) file.w[static_cast<std::size_t>(o)].push_back({joint, vw.mWeight});
     }
   }
-  const std::size_t nout = out_pos.size();
-  // Weld.
+  for (unsigned v = 0; v < mesh->mNumVertices; ++v) {
+    const int o = local_to_out[v];
+    require(
+        o < 0 || !file.w[static_cast<std::size_t>(o)].empty(),
+        path_ + ": mesh " + quote(m.name) + " vertex " + std::to_string(v), "has no skin weight",
+        "weight every vertex in the DCC tool, or set LoadOptions::ignore_weights to compute heat weights");
+  }
+}
+
+/// Welds the output vertices into the deformation mesh (`rig_.rest`, `rig_.triangles`, the
+/// output map); returns each welded vertex's first output vertex.
+std::vector<int> Loader::weld_file_mesh(const FileMesh& file) {
+  const std::size_t nout = file.pos.size();
   double tolerance = 0;
   if (options_.weld_tolerance > 0) {
     Eigen::AlignedBox3f box;
-    for (const auto& p : out_pos) box.extend(p);
+    for (const auto& p : file.pos) box.extend(p);
     tolerance = options_.weld_tolerance * static_cast<double>(box.diagonal().norm());
   }
-  rig_.output.to_welded = weld(out_pos, tolerance);
+  rig_.output.to_welded = weld(file.pos, tolerance);
   int nw = 0;
   for (int id : rig_.output.to_welded) nw = std::max(nw, id + 1);
   rig_.rest.resize(nw, 3);
@@ -780,15 +855,15 @@ void Loader::build_mesh() {
     const auto w = static_cast<std::size_t>(rig_.output.to_welded[i]);
     if (first[w] < 0) {
       first[w] = static_cast<int>(i);
-      rig_.rest.row(static_cast<Eigen::Index>(w)) = out_pos[i].transpose();
+      rig_.rest.row(static_cast<Eigen::Index>(w)) = file.pos[i].transpose();
     }
   }
-  rig_.output.triangles.resize(static_cast<Eigen::Index>(out_tris.size()), 3);
+  rig_.output.triangles.resize(static_cast<Eigen::Index>(file.tris.size()), 3);
   std::vector<Eigen::Vector3i> welded_tris;
-  for (std::size_t f = 0; f < out_tris.size(); ++f) {
-    rig_.output.triangles.row(static_cast<Eigen::Index>(f)) = out_tris[f].transpose();
+  for (std::size_t f = 0; f < file.tris.size(); ++f) {
+    rig_.output.triangles.row(static_cast<Eigen::Index>(f)) = file.tris[f].transpose();
     Eigen::Vector3i t;
-    for (int k = 0; k < 3; ++k) t[k] = rig_.output.to_welded[static_cast<std::size_t>(out_tris[f][k])];
+    for (int k = 0; k < 3; ++k) t[k] = rig_.output.to_welded[static_cast<std::size_t>(file.tris[f][k])];
     if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2])
       ++report_.dropped_triangles;
     else
@@ -800,65 +875,57 @@ void Loader::build_mesh() {
   if (report_.dropped_triangles > 0)
     report_.warnings.push_back(std::to_string(report_.dropped_triangles) +
                                " triangle(s) collapse when welded; left out of the deformation mesh");
-  // Welded weights: the mean of the merged vertices' weights.
-  if (weights) {
-    std::vector<std::map<int, double>> acc(static_cast<std::size_t>(nw));
-    std::vector<int> members(static_cast<std::size_t>(nw), 0);
-    int disagree = 0;
-    auto as_map = [&](std::size_t i) {
-      std::map<int, double> m;
-      double sum = 0;
-      for (const auto& [j, x] : out_w[i]) sum += x;
-      for (const auto& [j, x] : out_w[i]) m[j] += x / sum;
-      return m;
-    };
-    for (std::size_t i = 0; i < nout; ++i) {
-      const auto w = static_cast<std::size_t>(rig_.output.to_welded[i]);
-      const std::map<int, double> m = as_map(i);
-      if (members[w] > 0) {
-        const std::map<int, double> ref = as_map(static_cast<std::size_t>(first[w]));
-        bool same = ref.size() == m.size();
-        for (auto a = ref.begin(), b = m.begin(); same && a != ref.end(); ++a, ++b)
-          same = a->first == b->first && std::abs(a->second - b->second) <= 1e-5;
-        if (!same) ++disagree;
-      }
-      for (const auto& [j, x] : m) acc[w][j] += x;
-      ++members[w];
+  return first;
+}
+
+/// Welded weights: the mean of the merged vertices' weights, normalised (`first`: see
+/// weld_file_mesh).
+void Loader::weld_weights(const FileMesh& file, const std::vector<int>& first) {
+  const std::size_t nout = file.pos.size();
+  const int nw = static_cast<int>(first.size());
+  std::vector<std::map<int, double>> acc(static_cast<std::size_t>(nw));
+  std::vector<int> members(static_cast<std::size_t>(nw), 0);
+  int disagree = 0;
+  auto as_map = [&](std::size_t i) {
+    std::map<int, double> m;
+    double sum = 0;
+    for (const auto& [j, x] : file.w[i]) sum += x;
+    for (const auto& [j, x] : file.w[i]) m[j] += x / sum;
+    return m;
+  };
+  for (std::size_t i = 0; i < nout; ++i) {
+    const auto w = static_cast<std::size_t>(rig_.output.to_welded[i]);
+    const std::map<int, double> m = as_map(i);
+    if (members[w] > 0) {
+      const std::map<int, double> ref = as_map(static_cast<std::size_t>(first[w]));
+      bool same = ref.size() == m.size();
+      for (auto a = ref.begin(), b = m.begin(); same && a != ref.end(); ++a, ++b)
+        same = a->first == b->first && std::abs(a->second - b->second) <= 1e-5;
+      if (!same) ++disagree;
     }
-    if (disagree > 0)
-      report_.warnings.push_back(std::to_string(disagree) +
-                                 " welded vertex copies had different weights; their mean is used");
-    SkinWeights& sw = rig_.weights;
-    sw.offsets.assign(1, 0);
-    for (std::size_t w = 0; w < static_cast<std::size_t>(nw); ++w) {
-      for (const auto& [j, x] : acc[w]) {
-        sw.joints.push_back(j);
-        sw.weights.push_back(static_cast<float>(x / members[w]));
-      }
-      sw.offsets.push_back(static_cast<int>(sw.joints.size()));
-    }
-    normalize_weights(sw, nw, options_.min_weight, path_);
-    for (int v = 0; v < nw; ++v) report_.max_influences = std::max(report_.max_influences, sw.count(v));
+    for (const auto& [j, x] : m) acc[w][j] += x;
+    ++members[w];
   }
-  report_.meshes = static_cast<int>(meshes_.size());
-  report_.file_vertices = static_cast<int>(nout);
-  report_.welded_vertices = nw;
-  report_.weights_from_file = weights;
+  if (disagree > 0)
+    report_.warnings.push_back(std::to_string(disagree) +
+                               " welded vertex copies had different weights; their mean is used");
+  SkinWeights& sw = rig_.weights;
+  sw.offsets.assign(1, 0);
+  for (std::size_t w = 0; w < static_cast<std::size_t>(nw); ++w) {
+    for (const auto& [j, x] : acc[w]) {
+      sw.joints.push_back(j);
+      sw.weights.push_back(static_cast<float>(x / members[w]));
+    }
+    sw.offsets.push_back(static_cast<int>(sw.joints.size()));
+  }
+  normalize_weights(sw, nw, options_.min_weight, path_);
+  for (int v = 0; v < nw; ++v) report_.max_influences = std::max(report_.max_influences, sw.count(v));
 }
 
 void Loader::build_clips() {
   if (!options_.clips) return;
   const std::size_t n = nodes_.list.size();
-  // Nodes whose animated transform matters: the joints and every ancestor of a root joint.
-  std::vector<char> relevant(n, 0);
-  for (std::size_t j = 0; j < joint_node_.size(); ++j) {
-    int p = joint_node_[j];
-    relevant[static_cast<std::size_t>(p)] = 1;
-    if (rig_.joints[j].parent < 0)
-      for (p = nodes_.list[static_cast<std::size_t>(p)].parent; p >= 0;
-           p = nodes_.list[static_cast<std::size_t>(p)].parent)
-        relevant[static_cast<std::size_t>(p)] = 1;
-  }
+  const std::vector<char> relevant = animated_nodes();
   std::vector<Trs> rest_trs(n);
   for (std::size_t i = 0; i < n; ++i)
     if (relevant[i]) rest_trs[i] = decompose(nodes_.list[i].local);
@@ -888,48 +955,78 @@ void Loader::build_clips() {
       report_.warnings.push_back("animation " + quote(name) + " moves no joint; skipped");
       continue;
     }
-    Clip clip;
-    clip.name = name;
-    clip.fps = options_.fps;
-    const int frames = static_cast<int>(std::ceil(last * options_.fps - 1e-3)) + 1;
-    std::vector<Affine> local(n, Affine::Identity());
-    std::vector<Affine> world(n, Affine::Identity());
-    for (int f = 0; f < std::max(frames, 1); ++f) {
-      const double ticks = std::min(f / options_.fps, last) * tps;
-      for (std::size_t i = 0; i < n; ++i) {
-        if (!relevant[i]) continue;
-        const aiNodeAnim* ch = channel[i];
-        if (ch == nullptr) {
-          local[i] = nodes_.list[i].local;
-        } else {
-          Trs x;
-          x.t = sample(ch->mPositionKeys, ch->mNumPositionKeys, ticks, rest_trs[i].t);
-          x.r = sample(ch->mRotationKeys, ch->mNumRotationKeys, ticks, rest_trs[i].r);
-          x.s = sample(ch->mScalingKeys, ch->mNumScalingKeys, ticks, rest_trs[i].s);
-          local[i] = compose(x);
-        }
-        const int p = nodes_.list[i].parent;
-        world[i] = p >= 0 && relevant[static_cast<std::size_t>(p)]
-                       ? Affine(world[static_cast<std::size_t>(p)] * local[i])
-                       : local[i];
-      }
-      std::vector<Affine> pose(joint_node_.size());
-      for (std::size_t j = 0; j < joint_node_.size(); ++j) {
-        const auto node = static_cast<std::size_t>(joint_node_[j]);
-        const int pj = rig_.joints[j].parent;
-        if (pj < 0)
-          pose[j] = world[node];
-        else if (nodes_.list[node].parent == joint_node_[static_cast<std::size_t>(pj)])
-          pose[j] = local[node];
-        else
-          pose[j] = world[static_cast<std::size_t>(joint_node_[static_cast<std::size_t>(pj)])].inverse(
-                        Eigen::Affine) *
-                    world[node];
-      }
-      clip.local.push_back(std::move(pose));
-    }
-    rig_.clips.push_back(std::move(clip));
+    rig_.clips.push_back(sample_clip(name, channel, relevant, rest_trs, last, tps));
   }
+}
+
+/// Nodes whose animated transform matters: the joints and every ancestor of a root joint.
+std::vector<char> Loader::animated_nodes() const {
+  std::vector<char> relevant(nodes_.list.size(), 0);
+  for (std::size_t j = 0; j < joint_node_.size(); ++j) {
+    int p = joint_node_[j];
+    relevant[static_cast<std::size_t>(p)] = 1;
+    if (rig_.joints[j].parent < 0)
+      for (p = nodes_.list[static_cast<std::size_t>(p)].parent; p >= 0;
+           p = nodes_.list[static_cast<std::size_t>(p)].parent)
+        relevant[static_cast<std::size_t>(p)] = 1;
+  }
+  return relevant;
+}
+
+/// Samples one animation at `LoadOptions::fps` from 0 to `last` seconds (`channel`: per node, its
+/// channel or null for the node's own transform; `tps`: ticks per second).
+Clip Loader::sample_clip(const std::string& name, const std::vector<const aiNodeAnim*>& channel,
+                         const std::vector<char>& relevant, const std::vector<Trs>& rest_trs, double last,
+                         double tps) const {
+  const std::size_t n = nodes_.list.size();
+  Clip clip;
+  clip.name = name;
+  clip.fps = options_.fps;
+  const int frames = static_cast<int>(std::ceil(last * options_.fps - 1e-3)) + 1;
+  std::vector<Affine> local(n, Affine::Identity());
+  std::vector<Affine> world(n, Affine::Identity());
+  for (int f = 0; f < std::max(frames, 1); ++f) {
+    const double ticks = std::min(f / options_.fps, last) * tps;
+    for (std::size_t i = 0; i < n; ++i) {
+      if (!relevant[i]) continue;
+      const aiNodeAnim* ch = channel[i];
+      if (ch == nullptr) {
+        local[i] = nodes_.list[i].local;
+      } else {
+        Trs x;
+        x.t = sample(ch->mPositionKeys, ch->mNumPositionKeys, ticks, rest_trs[i].t);
+        x.r = sample(ch->mRotationKeys, ch->mNumRotationKeys, ticks, rest_trs[i].r);
+        x.s = sample(ch->mScalingKeys, ch->mNumScalingKeys, ticks, rest_trs[i].s);
+        local[i] = compose(x);
+      }
+      const int p = nodes_.list[i].parent;
+      world[i] = p >= 0 && relevant[static_cast<std::size_t>(p)]
+                     ? Affine(world[static_cast<std::size_t>(p)] * local[i])
+                     : local[i];
+    }
+    clip.local.push_back(joint_pose(local, world));
+  }
+  return clip;
+}
+
+/// Joint transforms relative to their parent joints from the nodes' `local` and `world`
+/// transforms of one frame.
+std::vector<Affine> Loader::joint_pose(const std::vector<Affine>& local,
+                                       const std::vector<Affine>& world) const {
+  std::vector<Affine> pose(joint_node_.size());
+  for (std::size_t j = 0; j < joint_node_.size(); ++j) {
+    const auto node = static_cast<std::size_t>(joint_node_[j]);
+    const int pj = rig_.joints[j].parent;
+    if (pj < 0)
+      pose[j] = world[node];
+    else if (nodes_.list[node].parent == joint_node_[static_cast<std::size_t>(pj)])
+      pose[j] = local[node];
+    else
+      pose[j] =
+          world[static_cast<std::size_t>(joint_node_[static_cast<std::size_t>(pj)])].inverse(Eigen::Affine) *
+          world[node];
+  }
+  return pose;
 }
 
 Rig Loader::load() {
@@ -980,7 +1077,7 @@ Rig Loader::load() {
         }
       } cleanup{dir};
       const std::string copy = (dir / "patched.gltf").string();
-      gltf::write_file_atomic(copy, [&](std::ostream& out) { out << gltf_.patched; });
+      write_text_file_atomically(copy, gltf_.patched);
       read(copy);
     }
   } catch (const InputError&) {

@@ -9,6 +9,7 @@
 #include <set>
 
 #include "io/gltf_io.h"
+#include "isokit/core/atomic_file.h"
 #include "isokit/core/error.h"
 #include "isokit/skinning/rig_io.h"
 
@@ -184,28 +185,29 @@ void write_animation(gltf::Builder& b, const Rig& rig, const Clip& clip, const s
   b.doc()["animations"].push_back({{"name", clip.name}, {"samplers", samplers}, {"channels", channels}});
 }
 
-}  // namespace
-
-void save_rig(const Rig& rig, const std::string& path) {
-  const std::string ext = gltf::extension(path);
-  require(ext == ".glb" || ext == ".gltf", path, "extension must be .glb or .gltf",
-          "name the file *.glb (binary) or *.gltf (JSON)");
-  validate(rig);
-  const std::size_t nj = rig.joints.size();
+/// Every joint needs a unique, non-empty name: files bind bones by name.
+void check_joint_names(const Rig& rig, const std::string& path) {
   std::set<std::string> names;
   for (const Joint& j : rig.joints)
     require(!j.name.empty() && names.insert(j.name).second, path + ": joint '" + j.name + "'",
             j.name.empty() ? "has no name" : "name is not unique",
             "give every joint a unique name (files bind bones by name)");
-  const OutputView out = output_view(rig, path);
-  const std::size_t nout = out.to_welded.size();
+}
 
-  gltf::Builder b;
-  json& d = b.doc();
-  // Joint nodes 0..nj-1, then the mesh node.
-  std::vector<Trs> rest(nj);
-  json nodes = json::array();
+/// The joints as glTF nodes: their rest transforms as TRS and the scene's root nodes.
+struct JointNodes {
+  std::vector<Trs> rest;
   std::vector<int> roots;
+};
+
+/// Writes the scene: joint nodes 0..nj-1, then the mesh node.
+JointNodes add_joint_nodes(json& d, const Rig& rig, const std::string& path) {
+  const std::size_t nj = rig.joints.size();
+  JointNodes jn;
+  std::vector<Trs>& rest = jn.rest;
+  std::vector<int>& roots = jn.roots;
+  rest.resize(nj);
+  json nodes = json::array();
   for (std::size_t j = 0; j < nj; ++j) {
     rest[j] = to_trs(rig.joints[j].rest_local, path + ": joint '" + rig.joints[j].name + "' rest transform");
     json node = {{"name", rig.joints[j].name}};
@@ -223,80 +225,102 @@ void save_rig(const Rig& rig, const std::string& path) {
   d["nodes"] = nodes;
   d["scene"] = 0;
   d["scenes"] = json::array({{{"nodes", roots}}});
+  return jn;
+}
 
-  // Vertex data over output vertices.
-  const std::vector<float> pos = output_positions(rig.rest, out.to_welded);
-  const std::vector<float> nrm = vertex_normals(pos, out.triangles);
-  const bool weighted = !rig.weights.empty();
-  int sets = 0;
-  std::vector<std::vector<std::pair<float, int>>> infl;  // per welded vertex, heaviest first
-  if (weighted) {
-    const int nw = static_cast<int>(rig.rest.rows());
-    infl.resize(static_cast<std::size_t>(nw));
-    for (int v = 0; v < nw; ++v) {
-      auto& list = infl[static_cast<std::size_t>(v)];
-      for (int k = rig.weights.offsets[v]; k < rig.weights.offsets[v + 1]; ++k)
-        if (rig.weights.weights[k] > 0) list.push_back({rig.weights.weights[k], rig.weights.joints[k]});
-      std::stable_sort(list.begin(), list.end(),
-                       [](const auto& x, const auto& y) { return x.first > y.first; });
-      sets = std::max(sets, (static_cast<int>(list.size()) + 3) / 4);
-    }
-  }
-  require(nj <= 65536, path, "has more than 65536 joints", "glTF joints are 16-bit indices");
-  json primitives = json::array();
-  for (std::size_t p = 0; p + 1 < out.primitive_offsets.size(); ++p) {
-    const int f0 = out.primitive_offsets[p];
-    const int f1 = out.primitive_offsets[p + 1];
-    if (f0 == f1) continue;
-    std::vector<int> verts;
-    for (int f = f0; f < f1; ++f)
-      for (int k = 0; k < 3; ++k) verts.push_back(out.triangles(f, k));
-    std::sort(verts.begin(), verts.end());
-    verts.erase(std::unique(verts.begin(), verts.end()), verts.end());
-    std::vector<std::uint32_t> local(nout, 0);
-    for (std::size_t i = 0; i < verts.size(); ++i)
-      local[static_cast<std::size_t>(verts[i])] = static_cast<std::uint32_t>(i);
-    const std::size_t n = verts.size();
-    std::vector<float> ppos(3 * n);
-    std::vector<float> pnrm(3 * n);
-    for (std::size_t i = 0; i < n; ++i)
-      for (std::size_t k = 0; k < 3; ++k) {
-        ppos[3 * i + k] = pos[3 * static_cast<std::size_t>(verts[i]) + k];
-        pnrm[3 * i + k] = nrm[3 * static_cast<std::size_t>(verts[i]) + k];
-      }
-    json attrs;
-    attrs["POSITION"] = b.add_floats(ppos.data(), n, "VEC3", true, gltf::kArrayBuffer);
-    attrs["NORMAL"] = b.add_floats(pnrm.data(), n, "VEC3", false, gltf::kArrayBuffer);
-    for (int s = 0; s < sets; ++s) {
-      std::vector<std::uint16_t> jv(4 * n, 0);
-      std::vector<float> wv(4 * n, 0.0f);
-      for (std::size_t i = 0; i < n; ++i) {
-        const auto& list = infl[static_cast<std::size_t>(out.to_welded[static_cast<std::size_t>(verts[i])])];
-        for (std::size_t k = 0; k < 4; ++k) {
-          const std::size_t at = 4 * static_cast<std::size_t>(s) + k;
-          if (at >= list.size()) break;
-          jv[4 * i + k] = static_cast<std::uint16_t>(list[at].second);
-          wv[4 * i + k] = list[at].first;
-        }
-      }
-      const std::string sfx = std::to_string(s);
-      if (nj <= 256) {
-        std::vector<std::uint8_t> j8(jv.begin(), jv.end());
-        attrs["JOINTS_" + sfx] = b.add_u8(j8.data(), n, "VEC4", gltf::kArrayBuffer);
-      } else {
-        attrs["JOINTS_" + sfx] = b.add_u16(jv.data(), n, "VEC4", gltf::kArrayBuffer);
-      }
-      attrs["WEIGHTS_" + sfx] = b.add_floats(wv.data(), n, "VEC4", false, gltf::kArrayBuffer);
-    }
-    std::vector<std::uint32_t> idx;
-    idx.reserve(3 * static_cast<std::size_t>(f1 - f0));
-    for (int f = f0; f < f1; ++f)
-      for (int k = 0; k < 3; ++k) idx.push_back(local[static_cast<std::size_t>(out.triangles(f, k))]);
-    primitives.push_back({{"attributes", attrs}, {"indices", add_indices(b, idx, n)}, {"mode", 4}});
-  }
-  d["meshes"] = json::array({{{"name", "isokit_mesh"}, {"primitives", primitives}}});
+/// Per welded vertex, its positive influences (weight, joint), heaviest first.
+using Influences = std::vector<std::vector<std::pair<float, int>>>;
 
-  // Skin.
+/// The influences of every welded vertex and the number of JOINTS_n / WEIGHTS_n sets of 4
+/// the largest one needs (`sets`).
+Influences sorted_influences(const Rig& rig, int& sets) {
+  Influences infl;
+  const int nw = static_cast<int>(rig.rest.rows());
+  infl.resize(static_cast<std::size_t>(nw));
+  for (int v = 0; v < nw; ++v) {
+    auto& list = infl[static_cast<std::size_t>(v)];
+    for (int k = rig.weights.offsets[v]; k < rig.weights.offsets[v + 1]; ++k)
+      if (rig.weights.weights[k] > 0) list.push_back({rig.weights.weights[k], rig.weights.joints[k]});
+    std::stable_sort(list.begin(), list.end(),
+                     [](const auto& x, const auto& y) { return x.first > y.first; });
+    sets = std::max(sets, (static_cast<int>(list.size()) + 3) / 4);
+  }
+  return infl;
+}
+
+/// The output mesh's vertex data, from which each glTF primitive takes its vertices.
+struct SkinnedVertices {
+  const OutputView& out;
+  const std::vector<float>& pos;
+  const std::vector<float>& nrm;
+  const Influences& infl;
+  int sets;
+  std::size_t joints;
+};
+
+/// Adds JOINTS_s / WEIGHTS_s for the primitive's vertices `verts` (u8 joints up to 256 joints).
+void add_weight_sets(gltf::Builder& b, const SkinnedVertices& sv, const std::vector<int>& verts,
+                     json& attrs) {
+  const std::size_t n = verts.size();
+  for (int s = 0; s < sv.sets; ++s) {
+    std::vector<std::uint16_t> jv(4 * n, 0);
+    std::vector<float> wv(4 * n, 0.0f);
+    for (std::size_t i = 0; i < n; ++i) {
+      const auto& list =
+          sv.infl[static_cast<std::size_t>(sv.out.to_welded[static_cast<std::size_t>(verts[i])])];
+      for (std::size_t k = 0; k < 4; ++k) {
+        const std::size_t at = 4 * static_cast<std::size_t>(s) + k;
+        if (at >= list.size()) break;
+        jv[4 * i + k] = static_cast<std::uint16_t>(list[at].second);
+        wv[4 * i + k] = list[at].first;
+      }
+    }
+    const std::string sfx = std::to_string(s);
+    if (sv.joints <= 256) {
+      std::vector<std::uint8_t> j8(jv.begin(), jv.end());
+      attrs["JOINTS_" + sfx] = b.add_u8(j8.data(), n, "VEC4", gltf::kArrayBuffer);
+    } else {
+      attrs["JOINTS_" + sfx] = b.add_u16(jv.data(), n, "VEC4", gltf::kArrayBuffer);
+    }
+    attrs["WEIGHTS_" + sfx] = b.add_floats(wv.data(), n, "VEC4", false, gltf::kArrayBuffer);
+  }
+}
+
+/// The primitive of triangles [f0, f1): its own vertices (POSITION, NORMAL, weight sets) and
+/// indices.
+json skinned_primitive(gltf::Builder& b, const SkinnedVertices& sv, int f0, int f1) {
+  const OutputView& out = sv.out;
+  std::vector<int> verts;
+  for (int f = f0; f < f1; ++f)
+    for (int k = 0; k < 3; ++k) verts.push_back(out.triangles(f, k));
+  std::sort(verts.begin(), verts.end());
+  verts.erase(std::unique(verts.begin(), verts.end()), verts.end());
+  std::vector<std::uint32_t> local(out.to_welded.size(), 0);
+  for (std::size_t i = 0; i < verts.size(); ++i)
+    local[static_cast<std::size_t>(verts[i])] = static_cast<std::uint32_t>(i);
+  const std::size_t n = verts.size();
+  std::vector<float> ppos(3 * n);
+  std::vector<float> pnrm(3 * n);
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t k = 0; k < 3; ++k) {
+      ppos[3 * i + k] = sv.pos[3 * static_cast<std::size_t>(verts[i]) + k];
+      pnrm[3 * i + k] = sv.nrm[3 * static_cast<std::size_t>(verts[i]) + k];
+    }
+  json attrs;
+  attrs["POSITION"] = b.add_floats(ppos.data(), n, "VEC3", true, gltf::kArrayBuffer);
+  attrs["NORMAL"] = b.add_floats(pnrm.data(), n, "VEC3", false, gltf::kArrayBuffer);
+  add_weight_sets(b, sv, verts, attrs);
+  std::vector<std::uint32_t> idx;
+  idx.reserve(3 * static_cast<std::size_t>(f1 - f0));
+  for (int f = f0; f < f1; ++f)
+    for (int k = 0; k < 3; ++k) idx.push_back(local[static_cast<std::size_t>(out.triangles(f, k))]);
+  return {{"attributes", attrs}, {"indices", add_indices(b, idx, n)}, {"mode", 4}};
+}
+
+/// The skin: inverse bind matrices (column-major), the joint nodes and, with one root joint,
+/// the skeleton root.
+void add_skin(gltf::Builder& b, const Rig& rig, const std::vector<int>& roots) {
+  const std::size_t nj = rig.joints.size();
   std::vector<float> ibm(16 * nj);
   for (std::size_t j = 0; j < nj; ++j) {
     const Eigen::Matrix4d m = rig.joints[j].inverse_bind.matrix();
@@ -309,15 +333,12 @@ void save_rig(const Rig& rig, const std::string& path) {
   for (std::size_t j = 0; j < nj; ++j) joint_nodes[j] = j;
   skin["joints"] = joint_nodes;
   if (roots.size() == 2) skin["skeleton"] = roots.front();
-  d["skins"] = json::array({skin});
-
-  for (const Clip& clip : rig.clips)
-    if (!clip.local.empty()) write_animation(b, rig, clip, rest, path);
-  b.write(path, ext == ".glb");
+  b.doc()["skins"] = json::array({skin});
 }
 
-void write_baked_glb(const Rig& rig, const std::vector<track::Positions>& frames, double fps,
-                     const std::string& path, const BakedGlbOptions& options) {
+/// Checks the arguments of write_baked_glb.
+void check_bake(const Rig& rig, const std::vector<track::Positions>& frames, double fps,
+                const std::string& path) {
   require(gltf::extension(path) == ".glb", path, "extension must be .glb", "name the file *.glb");
   require(fps > 0 && std::isfinite(fps), path + ": fps", "must be > 0 (got " + format_number(fps) + ")",
           "pass the frame rate of the frames");
@@ -331,6 +352,91 @@ void write_baked_glb(const Rig& rig, const std::vector<track::Positions>& frames
     require(frames[k].allFinite(), path + ": frame " + std::to_string(k), "has non-finite positions",
             "fix the deformation before baking");
   }
+}
+
+/// Adds morph-target delta accessors of `nout` VEC3: sparse when that is smaller than the dense
+/// array (and `sparse` is on); deltas no longer than `eps` count as zero (exact zeros when 0).
+struct DeltaWriter {
+  gltf::Builder& b;
+  std::size_t nout;
+  bool sparse;
+
+  int add(const std::vector<float>& delta, float eps) const {
+    const std::size_t index_bytes = nout <= 0x100 ? 1 : nout <= 0x10000 ? 2 : 4;
+    std::vector<std::uint32_t> nz;
+    std::vector<float> values;
+    for (std::size_t i = 0; i < nout; ++i) {
+      const float* x = &delta[3 * i];
+      const bool moved = eps > 0 ? std::sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]) > eps
+                                 : (x[0] != 0.0f || x[1] != 0.0f || x[2] != 0.0f);
+      if (!moved) continue;
+      nz.push_back(static_cast<std::uint32_t>(i));
+      values.insert(values.end(), x, x + 3);
+    }
+    if (sparse && nz.size() * (index_bytes + 12) < nout * 12) return b.add_sparse_vec3(nout, nz, values);
+    return b.add_floats(delta.data(), nout, "VEC3", true, gltf::kArrayBuffer);
+  }
+};
+
+/// The morph weights' animation: one-hot at frame k, time k / fps.
+void add_morph_animation(gltf::Builder& b, std::size_t nk, double fps, const BakedGlbOptions& options) {
+  std::vector<float> times(nk);
+  std::vector<float> weights(nk * nk, 0.0f);
+  for (std::size_t k = 0; k < nk; ++k) {
+    times[k] = static_cast<float>(static_cast<double>(k) / fps);
+    weights[k * nk + k] = 1.0f;
+  }
+  const int input = b.add_floats(times.data(), nk, "SCALAR", true);
+  const int output = b.add_floats(weights.data(), nk * nk, "SCALAR", false);
+  const char* interp = options.interpolation == MorphInterpolation::kStep ? "STEP" : "LINEAR";
+  b.doc()["animations"] = json::array(
+      {{{"name", options.clip_name},
+        {"samplers", json::array({{{"input", input}, {"output", output}, {"interpolation", interp}}})},
+        {"channels", json::array({{{"sampler", 0}, {"target", {{"node", 0}, {"path", "weights"}}}}})}}});
+}
+
+}  // namespace
+
+void save_rig(const Rig& rig, const std::string& path) {
+  const std::string ext = gltf::extension(path);
+  require(ext == ".glb" || ext == ".gltf", path, "extension must be .glb or .gltf",
+          "name the file *.glb (binary) or *.gltf (JSON)");
+  validate(rig);
+  const std::size_t nj = rig.joints.size();
+  check_joint_names(rig, path);
+  const OutputView out = output_view(rig, path);
+
+  gltf::Builder b;
+  json& d = b.doc();
+  const JointNodes joint_nodes = add_joint_nodes(d, rig, path);
+
+  // Vertex data over output vertices.
+  const std::vector<float> pos = output_positions(rig.rest, out.to_welded);
+  const std::vector<float> nrm = vertex_normals(pos, out.triangles);
+  const bool weighted = !rig.weights.empty();
+  int sets = 0;
+  Influences infl;
+  if (weighted) infl = sorted_influences(rig, sets);
+  require(nj <= 65536, path, "has more than 65536 joints", "glTF joints are 16-bit indices");
+  const SkinnedVertices sv{out, pos, nrm, infl, sets, nj};
+  json primitives = json::array();
+  for (std::size_t p = 0; p + 1 < out.primitive_offsets.size(); ++p) {
+    const int f0 = out.primitive_offsets[p];
+    const int f1 = out.primitive_offsets[p + 1];
+    if (f0 != f1) primitives.push_back(skinned_primitive(b, sv, f0, f1));
+  }
+  d["meshes"] = json::array({{{"name", "isokit_mesh"}, {"primitives", primitives}}});
+
+  add_skin(b, rig, joint_nodes.roots);
+  for (const Clip& clip : rig.clips)
+    if (!clip.local.empty()) write_animation(b, rig, clip, joint_nodes.rest, path);
+  b.write(path, ext == ".glb");
+}
+
+void write_baked_glb(const Rig& rig, const std::vector<track::Positions>& frames, double fps,
+                     const std::string& path, const BakedGlbOptions& options) {
+  check_bake(rig, frames, fps, path);
+  const Eigen::Index nw = rig.rest.rows();
   const OutputView out = output_view(rig, path);
   const std::size_t nout = out.to_welded.size();
   const std::size_t nk = frames.size();
@@ -354,23 +460,7 @@ void write_baked_glb(const Rig& rig, const std::vector<track::Positions>& frames
   const float pos_eps =
       options.sparse ? static_cast<float>(options.sparse_epsilon * box.diagonal().norm()) : 0.0f;
   const float nrm_eps = options.sparse ? static_cast<float>(options.sparse_epsilon) : 0.0f;
-  const std::size_t index_bytes = nout <= 0x100 ? 1 : nout <= 0x10000 ? 2 : 4;
-  // Adds one delta accessor: sparse when it is smaller than the dense array.
-  auto add_delta = [&](const std::vector<float>& delta, float eps) {
-    std::vector<std::uint32_t> nz;
-    std::vector<float> values;
-    for (std::size_t i = 0; i < nout; ++i) {
-      const float* x = &delta[3 * i];
-      const bool moved = eps > 0 ? std::sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]) > eps
-                                 : (x[0] != 0.0f || x[1] != 0.0f || x[2] != 0.0f);
-      if (!moved) continue;
-      nz.push_back(static_cast<std::uint32_t>(i));
-      values.insert(values.end(), x, x + 3);
-    }
-    if (options.sparse && nz.size() * (index_bytes + 12) < nout * 12)
-      return b.add_sparse_vec3(nout, nz, values);
-    return b.add_floats(delta.data(), nout, "VEC3", true, gltf::kArrayBuffer);
-  };
+  const DeltaWriter deltas{b, nout, options.sparse};
   json targets = json::array();
   json target_names = json::array();
   std::vector<float> delta(3 * nout);
@@ -383,11 +473,11 @@ void write_baked_glb(const Rig& rig, const std::vector<track::Positions>& frames
         delta[at] = posed[at] - rest[at];
       }
     json target;
-    target["POSITION"] = add_delta(delta, pos_eps);
+    target["POSITION"] = deltas.add(delta, pos_eps);
     if (options.normals) {
       const std::vector<float> n = vertex_normals(posed, out.triangles);
       for (std::size_t i = 0; i < 3 * nout; ++i) delta[i] = n[i] - rest_n[i];
-      target["NORMAL"] = add_delta(delta, nrm_eps);
+      target["NORMAL"] = deltas.add(delta, nrm_eps);
     }
     targets.push_back(target);
     char name[32];
@@ -410,20 +500,7 @@ void write_baked_glb(const Rig& rig, const std::vector<track::Positions>& frames
   d["nodes"] = json::array({{{"name", options.clip_name}, {"mesh", 0}}});
   d["scene"] = 0;
   d["scenes"] = json::array({{{"nodes", {0}}}});
-  // Morph weights: one-hot at frame k, time k / fps.
-  std::vector<float> times(nk);
-  std::vector<float> weights(nk * nk, 0.0f);
-  for (std::size_t k = 0; k < nk; ++k) {
-    times[k] = static_cast<float>(static_cast<double>(k) / fps);
-    weights[k * nk + k] = 1.0f;
-  }
-  const int input = b.add_floats(times.data(), nk, "SCALAR", true);
-  const int output = b.add_floats(weights.data(), nk * nk, "SCALAR", false);
-  const char* interp = options.interpolation == MorphInterpolation::kStep ? "STEP" : "LINEAR";
-  d["animations"] = json::array(
-      {{{"name", options.clip_name},
-        {"samplers", json::array({{{"input", input}, {"output", output}, {"interpolation", interp}}})},
-        {"channels", json::array({{{"sampler", 0}, {"target", {{"node", 0}, {"path", "weights"}}}}})}}});
+  add_morph_animation(b, nk, fps, options);
   require(b.binary_size() <= limit, path, "the baked file passes " + std::to_string(limit) + " bytes",
           "bake fewer frames or raise BakedGlbOptions::max_bytes");
   b.write(path, true);
@@ -436,7 +513,7 @@ void write_ply(const std::string& path, const track::Positions& positions,
     for (int k = 0; k < 3; ++k)
       require(triangles(f, k) >= 0 && triangles(f, k) < nv, path + ": triangle " + std::to_string(f),
               "vertex index out of range", "indices must lie in [0, " + std::to_string(nv) + ")");
-  gltf::write_file_atomic(path, [&](std::ostream& out) {
+  write_stream_atomically(path, [&](std::ostream& out) {
     out << "ply\nformat binary_little_endian 1.0\ncomment isokit\nelement vertex " << nv
         << "\nproperty float x\nproperty float y\nproperty float z\nelement face " << triangles.rows()
         << "\nproperty list uchar int vertex_indices\nend_header\n";

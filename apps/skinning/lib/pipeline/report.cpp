@@ -4,10 +4,10 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "isokit/core/atomic_file.h"
 #include "isokit/core/error.h"
 
 namespace isokit::skinning {
@@ -116,17 +116,7 @@ void write_text_file(const std::string& path, const std::string& text) {
     std::error_code ec;
     fs::create_directories(p.parent_path(), ec);
   }
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::binary);
-    require(bool(out), path, "cannot be written", "check that the folder exists and is writable");
-    out << text;
-    out.close();
-    require(bool(out), path, "write failed", "check the free disk space");
-  }
-  std::error_code ec;
-  fs::rename(tmp, path, ec);
-  require(!ec, path, "cannot be replaced (" + ec.message() + ")", "check the permissions");
+  write_text_file_atomically(path, text);
 }
 
 }  // namespace isokit::skinning

@@ -11,6 +11,7 @@
 #include <limits>
 
 #include "isokit/core/error.h"
+#include "isokit/core/math.h"
 #include "isokit/core/parallel.h"
 #include "isokit/skinning/metrics.h"
 #include "metrics/metrics_check.h"
@@ -19,7 +20,6 @@ namespace isokit::skinning {
 namespace {
 
 constexpr int kBandPixelRows = 8;  // pixel rows per band (rasterized and shaded together)
-constexpr double kPi = 3.14159265358979323846;
 
 bool finite(const Eigen::Vector3d& v) {
   return v.allFinite();

@@ -8,6 +8,7 @@
 #include <memory>
 #include <stdexcept>
 
+#include "isokit/core/atomic_file.h"
 #include "isokit/core/error.h"
 #include "isokit/skinning/render.h"
 
@@ -105,15 +106,12 @@ void draw_text(cairo_t* cr, const std::string& text, double x, double y_centre, 
 void write_png(const Image& image, const std::string& path) {
   check_image(image, "write_png('" + path + "')");
   const SurfacePtr surface = to_surface(image);
-  const std::string tmp = path + ".tmp";
-  const cairo_status_t status = cairo_surface_write_to_png(surface.get(), tmp.c_str());
-  if (status != CAIRO_STATUS_SUCCESS || std::rename(tmp.c_str(), path.c_str()) != 0) {
-    std::remove(tmp.c_str());
-    throw std::runtime_error("write_png: cannot write '" + path + "': " +
-                             (status != CAIRO_STATUS_SUCCESS ? cairo_status_to_string(status)
-                                                             : "rename from the temporary file failed") +
-                             "; check that the folder exists and is writable");
-  }
+  write_file_atomically(path, [&](const std::string& tmp) {
+    const cairo_status_t status = cairo_surface_write_to_png(surface.get(), tmp.c_str());
+    require(status == CAIRO_STATUS_SUCCESS, "write_png: " + path,
+            std::string("Cairo cannot write it (") + cairo_status_to_string(status) + ")",
+            "check that the folder is writable and the disk has space");
+  });
 }
 
 Image read_png(const std::string& path) {

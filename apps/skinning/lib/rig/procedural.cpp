@@ -13,6 +13,7 @@
 #include <tuple>
 
 #include "isokit/core/error.h"
+#include "isokit/core/math.h"
 #include "isokit/skinning/metrics.h"
 #include "rig/polygonize.h"
 #include "rig/procedural_detail.h"
@@ -77,7 +78,7 @@ class RoundConeProfile {
     s_ = (r0 - r1) / len_;
     c_ = std::sqrt(1 - s_ * s_);
     phi_ = std::atan2(c_, s_);
-    arc0_ = r0 * (M_PI - phi_);
+    arc0_ = r0 * (kPi - phi_);
     line_ = len_ * c_;
     arc1_ = r1 * phi_;
   }
@@ -85,7 +86,7 @@ class RoundConeProfile {
   /// (axial y, radius) at profile arc length u ∈ [0, length()].
   std::pair<double, double> at(double u) const {
     if (u <= arc0_) {
-      const double a = M_PI - u / r0_;
+      const double a = kPi - u / r0_;
       return {y0_ + r0_ * std::cos(a), r0_ * std::sin(a)};
     }
     if (u <= arc0_ + line_) {
@@ -115,7 +116,7 @@ RingLayout ring_layout(const RoundConeProfile& prof, double h) {
     const auto [y, r] = prof.at(prof.length() * k / m);
     l.y.push_back(y);
     l.r.push_back(r);
-    l.count.push_back(std::max(3, static_cast<int>(std::lround(2 * M_PI * r / h))));
+    l.count.push_back(std::max(3, static_cast<int>(std::lround(2 * kPi * r / h))));
   }
   return l;
 }
@@ -149,9 +150,9 @@ TriangleMesh revolve(const RoundConeProfile& prof, int target_vertices) {
   for (int k = 0; k < nrings; ++k) {
     const int n = l.count[static_cast<std::size_t>(k)];
     first[static_cast<std::size_t>(k)] = v;
-    phase[static_cast<std::size_t>(k)] = (k % 2) ? M_PI / n : 0.0;
+    phase[static_cast<std::size_t>(k)] = (k % 2) ? kPi / n : 0.0;
     for (int i = 0; i < n; ++i) {
-      const double t = phase[static_cast<std::size_t>(k)] + 2 * M_PI * i / n;
+      const double t = phase[static_cast<std::size_t>(k)] + 2 * kPi * i / n;
       const double r = l.r[static_cast<std::size_t>(k)];
       mesh.vertices.row(v++) << static_cast<float>(r * std::cos(t)),
           static_cast<float>(l.y[static_cast<std::size_t>(k)]), static_cast<float>(-r * std::sin(t));
@@ -170,10 +171,10 @@ TriangleMesh revolve(const RoundConeProfile& prof, int target_vertices) {
     // Merge the lower ring A = k and the upper ring B = k + 1 by angle.
     const int na = l.count[static_cast<std::size_t>(k)], nb = l.count[static_cast<std::size_t>(k) + 1];
     const double pa = phase[static_cast<std::size_t>(k)], pb = phase[static_cast<std::size_t>(k) + 1];
-    int j0 = static_cast<int>(std::lround((pa - pb) * nb / (2 * M_PI)));
-    const double b0 = pb + 2 * M_PI * j0 / nb;
-    auto ang_a = [&](int a) { return pa + 2 * M_PI * a / na; };
-    auto ang_b = [&](int b) { return b0 + 2 * M_PI * b / nb; };
+    int j0 = static_cast<int>(std::lround((pa - pb) * nb / (2 * kPi)));
+    const double b0 = pb + 2 * kPi * j0 / nb;
+    auto ang_a = [&](int a) { return pa + 2 * kPi * a / na; };
+    auto ang_b = [&](int b) { return b0 + 2 * kPi * b / nb; };
     int a = 0, b = 0;
     while (a < na || b < nb) {
       if (b == nb || (a < na && ang_a(a + 1) <= ang_b(b + 1))) {
@@ -393,7 +394,7 @@ SurfaceReport inspect_surface(const track::Positions& v, const track::Triangles&
     double m = 180.0;
     for (int k = 0; k < 3; ++k) {
       const Eigen::Vector3d a = p[(k + 1) % 3] - p[k], b = p[(k + 2) % 3] - p[k];
-      m = std::min(m, std::atan2(a.cross(b).norm(), a.dot(b)) * 180.0 / M_PI);
+      m = std::min(m, std::atan2(a.cross(b).norm(), a.dot(b)) * 180.0 / kPi);
     }
     r.min_angle_deg = std::min(r.min_angle_deg, m);
     if (m < 20.0) ++below;

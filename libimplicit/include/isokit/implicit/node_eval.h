@@ -12,6 +12,7 @@
 #include <cstdint>
 
 #include "isokit/core/hostdev.h"
+#include "isokit/core/math.h"
 #include "isokit/implicit/field_math.h"
 #include "isokit/operators/analytic.h"
 #include "isokit/operators/controller.h"
@@ -47,7 +48,7 @@ ISOKIT_HOSTDEV inline float fast_acos(float x) {
           ax +
       1.5707963050f;
   const float r = hd_sqrt(1.f - ax) * p;
-  return x < 0.f ? 3.14159265358979f - r : r;
+  return x < 0.f ? kPiF - r : r;
 }
 
 ISOKIT_HOSTDEV inline bool node_needs_alpha(OpKind k) {

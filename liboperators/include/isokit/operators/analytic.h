@@ -16,6 +16,7 @@
 #include <cmath>
 
 #include "isokit/core/hostdev.h"
+#include "isokit/core/math.h"
 #include "isokit/operators/operator.h"
 
 namespace isokit::operators {
@@ -105,7 +106,7 @@ ISOKIT_HOSTDEV inline OpSample clean_union(float f1, float f2) {
 /// branches agree at C = 0.5, `k = 0.5 tan θ`).
 ISOKIT_HOSTDEV inline OpSample gradient_blend_2013(float f1, float f2, float d) {
   const float dd = d < 0.f ? 0.f : (d > 1.f ? 1.f : d);
-  const float tan_theta = hd_tan(0.78539816339745f * (1.f - dd));
+  const float tan_theta = hd_tan(kPiF / 4.f * (1.f - dd));
   return detail::arc_blend(1, tan_theta, 0.7f, f1, f2);
 }
 

@@ -36,21 +36,32 @@
 
 namespace isokit::operators {
 
+/// Sparse factorisation: CHOLMOD (SuiteSparse) or Eigen's SparseLU; kAuto picks CHOLMOD when
+/// isokit was built with it.
 enum class SparseBackend { kAuto, kCholmod, kSparseLU };
+/// How slices are solved (see the file comment); kAuto picks kSchur when |D| ≤ max_schur_nodes.
 enum class SliceScheme { kAuto, kSchur, kRefactor };
 
+/// How the 2014 §4.2 system is solved (the paper names no solver). The options change the cost,
+/// not the operator: results agree up to rounding.
 struct BiharmonicOptions {
-  SparseBackend backend{SparseBackend::kAuto};  ///< kAuto: CHOLMOD when built with it
+  /// Sparse factorisation backend. Default kAuto.
+  SparseBackend backend{SparseBackend::kAuto};
+  /// Slice scheme. Default kAuto.
   SliceScheme scheme{SliceScheme::kAuto};
-  int max_schur_nodes{1500};  ///< kAuto threshold on |D| (ignored when edit_band_cells > 0)
-  /// Interactive editing: > 0 makes every node within this many cells of a profile constraint
-  /// (at any slice) dynamic, so solve_edited() re-solves edited profiles that stay inside that
-  /// band with the Schur scheme (larger setup, see docs/performance.md). 0 = off.
+  /// kAuto's limit on the dynamic set |D|, in grid nodes (the Schur complement is a dense
+  /// |D| x |D| matrix). Default 1500 (docs/operators.md). Ignored when edit_band_cells > 0.
+  int max_schur_nodes{1500};
+  /// Interactive editing band, in grid cells: > 0 makes every node within this many cells of a
+  /// profile constraint (at any slice) dynamic, so solve_edited() re-solves edited profiles that
+  /// stay inside the band with the Schur scheme, at a larger setup cost (docs/performance.md).
+  /// Default 0: off.
   int edit_band_cells{0};
-  /// Parallel tasks for generate() (slices split into this many chunks, each with its own
-  /// factorisation); 0 = one per hardware thread, 1 = serial.
+  /// Parallel tasks of generate(): the slices are split into this many chunks, each with its own
+  /// factorisation. Default 0: one per hardware thread; 1: serial.
   int tasks{0};
   /// Called after each finished slice with (done, total), from worker threads (serialised).
+  /// Default: none.
   std::function<void(int, int)> progress;
 };
 

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "isokit/core/hostdev.h"
+#include "isokit/core/math.h"
 
 namespace isokit::operators {
 
@@ -21,7 +22,7 @@ struct ControllerTable {
 
   /// `d(α)`; `α` is clamped to [0, π].
   ISOKIT_HOSTDEV float operator()(float alpha) const {
-    const float t = alpha * (float(kSize - 1) / 3.14159265358979f);
+    const float t = alpha * (float(kSize - 1) / kPiF);
     if (!(t > 0.f)) return values[0];  // also catches NaN
     if (t >= float(kSize - 1)) return values[kSize - 1];
     const int i = int(t);
@@ -46,9 +47,8 @@ class Controller {
   /// - "contact": `d_c` of 2014 Fig. 4(a): 0 on [0, π/2] (clean union while the joint bends
   ///   like an elbow before contact), smoothstep up to 1 at π (full contact of disjoint parts).
   /// - "bulge": `d_b` of 2014 Fig. 4(b): rises from 0 at α = 0 ("the bulge starts at low bending
-  ///   angles") to 1 at π. The paper gives only the plot; a curve at 1 from π/2 on (our first
-  ///   reading, the same as "bulge2013") makes the bulge operator's contact valley cut through a
-  ///   joint bent past 90° (docs/operators.md, "Decision: the bulge controller").
+  ///   angles") to 1 at π. The paper gives only the plot; why this reading: docs/operators.md,
+  ///   "Decision: the bulge controller".
   /// - "blend2013": 2013 Fig. 7(a) for the gradient-based blend, as the blend amount `d`
   ///   (θ = θ_u (1 - d) + θ_b d): union (0) at α = 0, full blend (1) at π/4, union again from
   ///   π/2 to π.

@@ -21,8 +21,9 @@ struct StoredOperator {
 /// `X.json` for `X.npy`.
 std::string spec_path_for(const std::string& npy_path);
 
-/// Writes `npy_path` and the spec beside it. \throw isokit::InputError if the grid's shape does
-/// not match the spec, std::runtime_error if a file cannot be written.
+/// Writes the spec beside `npy_path`, then `npy_path` (each atomically: a failed spec leaves the
+/// .npy untouched). \throw isokit::InputError if the grid's shape does not match the spec or a
+/// file cannot be written (the message names the file).
 void save_operator(const std::string& npy_path, const OperatorSpec& spec, const GridOperator& grid);
 
 /// Reads and validates both files. \throw isokit::InputError naming the file and the field

@@ -46,16 +46,25 @@ struct ProfileCurve {
   std::vector<Point2> polyline(double d) const;
 };
 
+/// What the biharmonic generator builds (2014 §4.2). `validate` checks the ranges below.
 struct OperatorSpec {
+  /// Name stored in the file and shown by the tools. Default "custom".
   std::string name{"custom"};
-  int resolution{128};  ///< nodes per f axis (2014 §6.1: 128), in [8, 1024]
-  int slices{128};      ///< number of d slices (2014 §6.1: 128), in [8, 1024]
-  /// Slope of the constraint values across the profile: nodes of crossed cells get
-  /// `0.5 + distance_slope * signed distance` (2014 §4.2; slope 1 matches `g(f, 0) = f`).
+  /// Grid nodes per f axis, in [8, 1024]. Default 128 (2014 §6.1).
+  int resolution{128};
+  /// Number of d slices, in [8, 1024]. Default 128 (2014 §6.1).
+  int slices{128};
+  /// Slope of the constraint values across the profile, > 0 (g per unit of distance in the
+  /// (f1, f2) square): nodes of crossed cells get `0.5 + distance_slope * signed distance`
+  /// (2014 §4.2, eq. 2). Default 1, which matches `g(f, 0) = f`.
   double distance_slope{1.0};
-  /// Controller: a preset name (Controller::preset) unless `controller_knots` is non-empty.
+  /// Controller `d(α)` (2014 §4.1): a preset name (Controller::preset), used unless
+  /// `controller_knots` is non-empty. Default "contact".
   std::string controller{"contact"};
+  /// A custom controller (angles in radians, values in [0, 1]). Default empty: the preset.
   std::vector<ControllerKnot> controller_knots;
+  /// The profile curves along which `g = 0.5` (2014 §4.2, Fig. 5). Default empty
+  /// (`preset_spec` fills them).
   std::vector<ProfileCurve> curves;
 
   Controller make_controller() const;
@@ -83,7 +92,8 @@ void validate(const OperatorSpec& spec, const std::string& source);
 /// JSON text <-> spec (validated). \throw isokit::InputError naming `source` and the field.
 OperatorSpec spec_from_json(const std::string& text, const std::string& source);
 std::string spec_to_json(const OperatorSpec& spec);
-/// Files; save writes to a temporary name and renames.
+/// Files; save writes atomically (temporary name, then rename). \throw isokit::InputError naming
+/// the file if it cannot be read or written.
 OperatorSpec load_spec(const std::string& path);
 void save_spec(const OperatorSpec& spec, const std::string& path);
 

@@ -2,8 +2,8 @@
 /// \file
 /// 2D figures for operator slices and field slices (Cairo): a heat map of a sampled scalar
 /// function, iso-lines extracted by marching squares, overlaid polylines and labels. The output
-/// format follows the file extension (.png, .svg, .pdf); files are written to a temporary name
-/// and renamed, so a failed write never leaves a half-written figure.
+/// format follows the file extension (.png, .svg, .pdf); files are written atomically
+/// (isokit::write_file_atomically), so a failed write never leaves a half-written figure.
 #pragma once
 
 #include <array>
@@ -45,8 +45,8 @@ struct FigureOptions {
   std::string title;
 };
 
-/// A heat map with overlays, saved by extension. Throws `isokit::InputError` on a bad grid or
-/// an unknown extension, `std::runtime_error` if the file cannot be written.
+/// A heat map with overlays, saved by extension. Throws `isokit::InputError` on a bad grid, an
+/// unknown extension or a file that cannot be written (the message names it).
 class Figure {
  public:
   Figure(ScalarGrid grid, FigureOptions options = {});
@@ -79,6 +79,8 @@ class Figure {
   std::vector<Stroke> strokes_;
   std::vector<Label> labels_;
   std::vector<std::string> caption_;
+
+  class Painter;  // draws the layers with Cairo (figure.cpp)
 };
 
 }  // namespace isokit::plot

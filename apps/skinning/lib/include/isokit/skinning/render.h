@@ -76,9 +76,9 @@ Camera frame_camera(const RenderOptions& options, const Eigen::AlignedBox3d& box
 Image render_mesh(const track::Positions& positions, const track::Triangles& triangles,
                   const RenderOptions& options);
 
-/// Writes a PNG through Cairo (to `path + ".tmp"`, then renamed).
-/// \throw InputError for an image whose size does not match its pixels;
-/// \throw std::runtime_error naming `path` if it cannot be written.
+/// Writes a PNG through Cairo, atomically (isokit::write_file_atomically).
+/// \throw InputError for an image whose size does not match its pixels, or naming `path` if it
+/// cannot be written.
 void write_png(const Image& image, const std::string& path);
 
 /// Reads a PNG through Cairo. \throw std::runtime_error naming `path` if it cannot be read.

@@ -28,7 +28,8 @@ std::string metrics_json(const Rig& rig, const std::vector<BakeResult>& results,
 /// volume ratio, rest recovery, ms/frame, ratio to DQS (worst values over the animation).
 std::string comparison_table(const std::vector<BakeResult>& results);
 
-/// Writes `text` to `path` through a temporary file (no half-written file).
+/// Writes `text` to `path` atomically (isokit::write_text_file_atomically), creating its folder
+/// first when missing.
 /// \throw InputError naming the path when it cannot be written.
 void write_text_file(const std::string& path, const std::string& text);
 

@@ -14,7 +14,7 @@
 /// `LoadOptions::fps` (linear / slerp). The mesh node's own transform is ignored for skinned
 /// meshes (glTF rule, applied to every format): the skinned mesh lies in scene space.
 ///
-/// Writers write a temporary file next to `path` and rename it: no half-written file is left.
+/// Writers write atomically (isokit::write_file_atomically): no half-written file is left.
 #pragma once
 
 #include <cstdint>
@@ -26,15 +26,24 @@
 
 namespace isokit::skinning {
 
+/// How `load_rig` reads a file. File handling only: none of these comes from the papers.
 struct LoadOptions {
-  double fps{30};  ///< clip sampling rate (frames per second), > 0
-  /// Welding distance relative to the bounding-box diagonal; 0 = exact position equality.
+  /// Clip sampling rate in frames per second, > 0 (keys are sampled linearly / by slerp).
+  /// Default 30.
+  double fps{30};
+  /// Welding distance as a fraction of the bounding-box diagonal (unitless, ≥ 0). Default 0:
+  /// only exactly equal positions are welded.
   double weld_tolerance{0};
-  /// Load only skinned meshes whose mesh or node name equals this (empty: all of them).
+  /// Load only the skinned meshes whose mesh or node name equals this. Default empty: all.
   std::string mesh;
-  bool clips{true};            ///< false: skip the animations
-  bool ignore_weights{false};  ///< true: load with empty weights (the pipeline computes heat weights)
-  float min_weight{0.0f};      ///< drop influences below this fraction of a vertex's total weight
+  /// Read the animations as clips. Default true; false skips them.
+  bool clips{true};
+  /// Load with empty weights, so that the pipeline computes heat-diffusion weights (Baran &
+  /// Popović 2007). Default false: the file's weights.
+  bool ignore_weights{false};
+  /// Influences below this fraction of a vertex's total weight are dropped before
+  /// renormalising (unitless, in [0, 1)). Default 0: all kept.
+  float min_weight{0.0f};
 };
 
 /// What `load_rig` found (for the CLI's summary); `warnings` lists everything it changed or
@@ -66,16 +75,27 @@ Rig load_rig(const std::string& path, const LoadOptions& options = {}, LoadRepor
 /// extension, or an unwritable path.
 void save_rig(const Rig& rig, const std::string& path);
 
+/// glTF animation sampler interpolation of the morph weights ("LINEAR", "STEP").
 enum class MorphInterpolation { kLinear, kStep };
 
+/// How `write_baked_glb` encodes a bake. File encoding only: none of these comes from the papers.
 struct BakedGlbOptions {
-  bool normals{true};  ///< per-frame vertex normals as NORMAL morph deltas
+  /// Write per-frame vertex normals as NORMAL morph deltas. Default true.
+  bool normals{true};
+  /// Interpolation of the morph weights between frames. Default kLinear (blends neighbouring
+  /// frames); kStep shows each frame as baked.
   MorphInterpolation interpolation{MorphInterpolation::kLinear};
-  bool sparse{true};  ///< sparse delta accessors for frames where few vertices move
-  /// Deltas shorter than this fraction of the bbox diagonal count as zero (sparse only).
+  /// Use sparse delta accessors for frames where they are smaller than dense ones. Default true.
+  bool sparse{true};
+  /// Sparse only: position deltas shorter than this fraction of the bounding-box diagonal, and
+  /// normal deltas shorter than this (unit normals), count as zero (unitless, ≥ 0). Default 0:
+  /// only exact zeros.
   double sparse_epsilon{0};
+  /// Name of the mesh, node and animation in the file. Default "baked".
   std::string clip_name{"baked"};
-  std::uint64_t max_bytes{std::uint64_t{1} << 31};  ///< refuse larger files (GLB's own cap: 4 GiB)
+  /// Largest file written, in bytes; larger bakes are refused. Default 2 GiB (GLB's own cap is
+  /// 4 GiB).
+  std::uint64_t max_bytes{std::uint64_t{1} << 31};
 };
 
 /// Writes a baked deformation as a `.glb`: the rest mesh (`Rig::output` vertices at `rig.rest`),
