@@ -3,11 +3,13 @@
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <map>
 #include <mutex>
 #include <numeric>
+#include <utility>
 
 #include "isokit/core/error.h"
 #include "isokit/implicit/skeleton.h"
@@ -84,6 +86,279 @@ std::vector<int> clean_partition(const std::vector<int>& labels, const track::Tr
   return out;
 }
 
+namespace {
+
+/// The partition seen per joint (recomputed at each pass, after failed fits are merged).
+struct JointParts {
+  const Rig& rig;
+  const std::vector<Eigen::Vector3d>& joint_positions;  ///< rest, per joint
+  const std::vector<int>& partition;                    ///< joint per vertex
+  std::vector<std::vector<int>> triangles;              ///< per joint: its triangles
+  std::vector<int> count;                               ///< per joint: its vertices
+  std::vector<std::vector<int>> children;               ///< per joint: its child joints
+
+  /// Nearest ancestor of `j` with vertices (-1: none): a part to close the start against.
+  int ancestor_with_vertices(int j) const {
+    int p = rig.joints[j].parent;
+    while (p >= 0 && count[p] == 0) p = rig.joints[p].parent;
+    return p;
+  }
+};
+
+/// Step 1 (docs/skinning.md "Pipeline", 1): the triangles, vertex counts and children of every
+/// joint. A triangle belongs to the joint of at least two of its vertices (else to its first
+/// vertex's joint).
+JointParts joint_parts(const Rig& r, const std::vector<Eigen::Vector3d>& jp,
+                       const std::vector<int>& partition) {
+  const int nv = static_cast<int>(r.rest.rows());
+  const int nj = static_cast<int>(r.joints.size());
+  JointParts parts{r, jp, partition, {}, {}, {}};
+  parts.triangles.resize(static_cast<std::size_t>(nj));
+  for (Eigen::Index f = 0; f < r.triangles.rows(); ++f) {
+    const int a = partition[r.triangles(f, 0)], b = partition[r.triangles(f, 1)],
+              c = partition[r.triangles(f, 2)];
+    const int j = (b == c) ? b : a;
+    parts.triangles[static_cast<std::size_t>(j)].push_back(static_cast<int>(f));
+  }
+  parts.count.assign(static_cast<std::size_t>(nj), 0);
+  for (int v = 0; v < nv; ++v) ++parts.count[partition[v]];
+  parts.children.resize(static_cast<std::size_t>(nj));
+  for (int j = 0; j < nj; ++j)
+    if (r.joints[j].parent >= 0) parts.children[r.joints[j].parent].push_back(j);
+  return parts;
+}
+
+/// Step 3, second pass (docs/skinning.md "Pipeline", 3): the vertices of every joint whose fit
+/// failed go to a fitted neighbour (the parent, else the child with most vertices), which is
+/// marked in `refit`. \return false when no vertex moved (nothing to refit).
+bool merge_failed_fits(const Rig& r, std::vector<BonePart>& bones, std::vector<int>& partition,
+                       std::vector<char>& refit) {
+  const int nv = static_cast<int>(r.rest.rows());
+  const int nj = static_cast<int>(r.joints.size());
+  std::vector<int> target(static_cast<std::size_t>(nj), -1);
+  for (int j = 0; j < nj; ++j) {
+    if (bones[j].fitted || bones[j].vertices == 0) continue;
+    int t = r.joints[j].parent;
+    if (t < 0 || !bones[t].fitted) {
+      t = -1;
+      for (int c = 0; c < nj; ++c)
+        if (r.joints[c].parent == j && bones[c].fitted && (t < 0 || bones[c].vertices > bones[t].vertices))
+          t = c;
+    }
+    if (t < 0) continue;
+    target[j] = t;
+    refit[t] = 1;
+  }
+  bool any = false;
+  for (int v = 0; v < nv; ++v)
+    if (target[partition[v]] >= 0) {
+      partition[v] = target[partition[v]];
+      any = true;
+    }
+  if (!any) return false;
+  for (int j = 0; j < nj; ++j)
+    if (target[j] >= 0) {
+      bones[j].vertices = 0;
+      bones[j].merged_into = target[j];
+      bones[j].error += " (its vertices were merged into '" + r.joints[target[j]].name + "')";
+    }
+  return true;
+}
+
+/// The mesh of joint `j`'s part: its triangles over its own, locally numbered rest vertices.
+implicit::MeshPart part_mesh(const JointParts& parts, int j, const std::string& name) {
+  const Rig& r = parts.rig;
+  implicit::MeshPart part;
+  part.name = name;
+  std::vector<int> local(static_cast<std::size_t>(r.rest.rows()), -1);
+  for (int f : parts.triangles[j]) {
+    std::array<int, 3> t{};
+    for (int k = 0; k < 3; ++k) {
+      const int v = r.triangles(f, k);
+      if (local[v] < 0) {
+        local[v] = static_cast<int>(part.vertices.size());
+        part.vertices.push_back({r.rest(v, 0), r.rest(v, 1), r.rest(v, 2)});
+      }
+      t[static_cast<std::size_t>(k)] = local[v];
+    }
+    part.triangles.push_back(t);
+  }
+  return part;
+}
+
+/// Step 2, branching parts (2013 §4.1 closes every joint of a part; docs/skinning.md "Decision:
+/// closing a branching part's holes"): a part such as hips or chest has a hole at each child
+/// limb; each gets an opening like a bone end, along the child's direction. The children are
+/// the nearest descendants with vertices (through merged joints).
+void add_child_openings(const JointParts& parts, int j, double extent, implicit::MeshPart& part) {
+  const Rig& r = parts.rig;
+  const std::vector<Eigen::Vector3d>& jp = parts.joint_positions;
+  const std::vector<std::vector<int>>& children = parts.children;
+  const int nv = static_cast<int>(r.rest.rows());
+  std::vector<int> openings, stack(children[j].rbegin(), children[j].rend());
+  while (!stack.empty()) {
+    const int c = stack.back();
+    stack.pop_back();
+    if (parts.count[c] > 0)
+      openings.push_back(c);
+    else
+      stack.insert(stack.end(), children[c].rbegin(), children[c].rend());
+  }
+  for (int c : openings) {
+    Eigen::Vector3d cdir;
+    if (children[c].size() == 1 && (jp[children[c][0]] - jp[c]).norm() > 1e-3 * extent) {
+      cdir = jp[children[c][0]] - jp[c];
+    } else {
+      Eigen::Vector3d cc = Eigen::Vector3d::Zero();
+      int m = 0;
+      for (int v = 0; v < nv; ++v)
+        if (parts.partition[v] == c) cc += Eigen::Vector3d(r.rest(v, 0), r.rest(v, 1), r.rest(v, 2)), ++m;
+      cdir = cc / std::max(m, 1) - jp[c];
+    }
+    if (!(cdir.norm() > 1e-6 * extent)) continue;
+    cdir.normalize();
+    part.openings.push_back({{jp[c].x(), jp[c].y(), jp[c].z()}, {cdir.x(), cdir.y(), cdir.z()}});
+  }
+}
+
+/// Step 2, a leaf or branching joint (or a refit): the segment runs from the joint along the
+/// direction to its vertices' centroid (their principal axis, oriented away from the parent, for
+/// a root or when the centroid lies on the joint), grown so that the culling planes cut no
+/// vertex at an end without a joint. Sets `seg0`, `seg1` and the closure flags of `o`.
+void segment_along_vertices(const JointParts& parts, int j, const implicit::MeshPart& part,
+                            const Eigen::Vector3d& centroid, double extent, bool has_parent_part,
+                            implicit::PartFitOptions& o, Eigen::Vector3d& seg0, Eigen::Vector3d& seg1) {
+  const Rig& r = parts.rig;
+  const std::vector<Eigen::Vector3d>& jp = parts.joint_positions;
+  const Eigen::Vector3d start = jp[j];
+  Eigen::Vector3d dir = centroid - start;
+  if (dir.norm() < 0.1 * extent || !has_parent_part) {
+    // Principal axis of the vertices, oriented away from the parent.
+    Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+    for (const Vec3d& p : part.vertices) {
+      const Eigen::Vector3d d = Eigen::Vector3d(p.x, p.y, p.z) - centroid;
+      cov += d * d.transpose();
+    }
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(cov);
+    dir = es.eigenvectors().col(2);
+    if (r.joints[j].parent >= 0 && dir.dot(start - jp[r.joints[j].parent]) < 0) dir = -dir;
+  }
+  dir.normalize();
+  double lo = 0, hi = 0;
+  for (const Vec3d& p : part.vertices) {
+    const double u = (Eigen::Vector3d(p.x, p.y, p.z) - start).dot(dir);
+    lo = std::min(lo, u);
+    hi = std::max(hi, u);
+  }
+  // Grow the segment so that the culling planes (at cull_h of its length) cut no vertex at
+  // an end without a joint.
+  const double margin = 2.0 * o.cull_h / (1.0 - 2.0 * o.cull_h) * (hi - lo) + 1e-6 * extent;
+  // Vertices well behind the joint (a root, or hips around their joint): no joint end.
+  if (!has_parent_part || lo < -0.25 * (hi - lo)) o.close_start = false;
+  if (!o.close_start) seg0 = start + dir * (lo - margin);
+  seg1 = start + dir * (hi + margin);
+  o.close_end = false;
+}
+
+/// Step 2 (2013 §4.1; docs/skinning.md "Pipeline", 2): the bone segment of joint `j`'s part,
+/// which places the fit's culling planes and closure points. A joint with one child (not being
+/// refitted) runs to the child; any other along its vertices (`segment_along_vertices`), with an
+/// opening per child limb. Sets the part's segment and openings and the closure flags of `o`.
+/// \return the segment `{start, end}`.
+std::pair<Eigen::Vector3d, Eigen::Vector3d> place_bone_segment(const JointParts& parts, int j, bool refit,
+                                                               implicit::MeshPart& part,
+                                                               implicit::PartFitOptions& o) {
+  const std::vector<Eigen::Vector3d>& jp = parts.joint_positions;
+  const std::vector<std::vector<int>>& children = parts.children;
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  for (const Vec3d& p : part.vertices) centroid += Eigen::Vector3d(p.x, p.y, p.z);
+  centroid /= double(part.vertices.size());
+  const Eigen::Vector3d start = jp[j];
+  const bool has_parent_part = parts.ancestor_with_vertices(j) >= 0;
+  o.close_start = has_parent_part;
+  double extent = 0;
+  for (const Vec3d& p : part.vertices)
+    extent = std::max(extent, (Eigen::Vector3d(p.x, p.y, p.z) - start).norm());
+  Eigen::Vector3d seg0 = start, seg1;
+  if (!refit && children[j].size() == 1 && (jp[children[j][0]] - start).norm() > 1e-3 * extent) {
+    seg1 = jp[children[j][0]];
+    o.close_end = parts.count[children[j][0]] > 0;
+  } else {
+    segment_along_vertices(parts, j, part, centroid, extent, has_parent_part, o, seg0, seg1);
+    add_child_openings(parts, j, extent, part);
+  }
+  part.bone_start = {seg0.x(), seg0.y(), seg0.z()};
+  part.bone_end = {seg1.x(), seg1.y(), seg1.z()};
+  return {seg0, seg1};
+}
+
+/// Step 3 (docs/skinning.md "Pipeline", 3): the HRBF fit (libimplicit `fit_part`), retried.
+/// Heat weights have no visibility term, so a partition may hold patches of a neighbouring
+/// surface facing the bone (armpit, crotch); an HRBF through them has spurious far-field inside
+/// regions. Triangles facing the bone are dropped, more strictly on each retry, and the last try
+/// also drops the closure points. Sets `b.fit` and `b.fitted`, or `b.error` (the first try's).
+void fit_with_retries(implicit::MeshPart& part, const implicit::PartFitOptions& o,
+                      const Eigen::Vector3d& seg0, const Eigen::Vector3d& seg1, BonePart& b) {
+  const Eigen::Vector3d axis = seg1 - seg0;
+  auto facing = [&](const std::array<int, 3>& t) {
+    Eigen::Vector3d q[3];
+    for (int k = 0; k < 3; ++k) {
+      const Vec3d& v = part.vertices[static_cast<std::size_t>(t[static_cast<std::size_t>(k)])];
+      q[k] = Eigen::Vector3d(v.x, v.y, v.z);
+    }
+    const Eigen::Vector3d c = (q[0] + q[1] + q[2]) / 3.0, n = (q[1] - q[0]).cross(q[2] - q[0]);
+    const double u = std::clamp((c - seg0).dot(axis) / std::max(axis.squaredNorm(), 1e-300), 0.0, 1.0);
+    const Eigen::Vector3d radial = c - (seg0 + u * axis);
+    const double denom = n.norm() * radial.norm();
+    return denom > 0 ? n.dot(radial) / denom : 1.0;
+  };
+  const std::vector<std::array<int, 3>> all = part.triangles;
+  const double thresholds[] = {-0.2, 0.3, 0.3};
+  for (int attempt = 0; attempt < 3 && !b.fitted; ++attempt) {
+    part.triangles.clear();
+    for (const auto& t : all)
+      if (facing(t) > thresholds[attempt]) part.triangles.push_back(t);
+    implicit::PartFitOptions oa = o;
+    if (attempt == 2) oa.close_start = oa.close_end = false;
+    if (attempt == 2) part.openings.clear();
+    try {
+      b.fit = implicit::fit_part(part, oa);
+      b.fitted = true;
+      b.error.clear();
+    } catch (const InputError& e) {
+      if (attempt == 0) b.error = e.what();
+    }
+  }
+}
+
+/// Steps 2 and 3 for joint `j`: its part's mesh, bone segment and fit into `b`.
+/// \return false when the joint has no vertices or no triangles (`b.error` says which).
+bool fit_joint(const JointParts& parts, const SkinSetup& setup, int j, bool refit, BonePart& b) {
+  const Rig& r = parts.rig;
+  b.fitted = false;
+  b.error.clear();
+  b.joint = j;
+  b.vertices = parts.count[j];
+  const std::string name = r.name + ": joint '" + r.joints[j].name + "'";
+  if (parts.count[j] == 0) {
+    b.error = "no vertices";
+    return false;
+  }
+  implicit::MeshPart part = part_mesh(parts, j, name);
+  if (part.triangles.empty()) {
+    b.error = "no triangles";
+    return false;
+  }
+  implicit::PartFitOptions o = setup.fit;
+  const auto [seg0, seg1] = place_bone_segment(parts, j, refit, part, o);
+  b.start = seg0;
+  b.end = seg1;
+  fit_with_retries(part, o, seg0, seg1, b);
+  return true;
+}
+
+}  // namespace
+
 FittedRig::FittedRig(const Rig& rig, const SkinSetup& setup, const Progress& progress)
     : rig_(std::make_shared<const Rig>(rig)) {
   const Rig& r = *rig_;
@@ -101,198 +376,12 @@ FittedRig::FittedRig(const Rig& rig, const SkinSetup& setup, const Progress& pro
   // fitted neighbour (the parent, else the child with most vertices) and refits those
   // neighbours with a segment covering all their vertices.
   for (int pass = 0; pass < 2; ++pass) {
-    if (pass == 1) {
-      std::vector<int> target(static_cast<std::size_t>(nj), -1);
-      for (int j = 0; j < nj; ++j) {
-        if (bones_[j].fitted || bones_[j].vertices == 0) continue;
-        int t = r.joints[j].parent;
-        if (t < 0 || !bones_[t].fitted) {
-          t = -1;
-          for (int c = 0; c < nj; ++c)
-            if (r.joints[c].parent == j && bones_[c].fitted &&
-                (t < 0 || bones_[c].vertices > bones_[t].vertices))
-              t = c;
-        }
-        if (t < 0) continue;
-        target[j] = t;
-        refit[t] = 1;
-      }
-      bool any = false;
-      for (int v = 0; v < nv; ++v)
-        if (target[partition_[v]] >= 0) {
-          partition_[v] = target[partition_[v]];
-          any = true;
-        }
-      if (!any) break;
-      for (int j = 0; j < nj; ++j)
-        if (target[j] >= 0) {
-          bones_[j].vertices = 0;
-          bones_[j].merged_into = target[j];
-          bones_[j].error += " (its vertices were merged into '" + r.joints[target[j]].name + "')";
-        }
-    }
-    // Triangles per joint: a triangle belongs to the joint of at least two of its vertices
-    // (else to its first vertex's joint).
-    std::vector<std::vector<int>> tris(static_cast<std::size_t>(nj));
-    for (Eigen::Index f = 0; f < r.triangles.rows(); ++f) {
-      const int a = partition_[r.triangles(f, 0)], b = partition_[r.triangles(f, 1)],
-                c = partition_[r.triangles(f, 2)];
-      const int j = (b == c) ? b : a;
-      tris[static_cast<std::size_t>(j)].push_back(static_cast<int>(f));
-    }
-    std::vector<int> count(static_cast<std::size_t>(nj), 0);
-    for (int v = 0; v < nv; ++v) ++count[partition_[v]];
-    std::vector<std::vector<int>> children(static_cast<std::size_t>(nj));
-    for (int j = 0; j < nj; ++j)
-      if (r.joints[j].parent >= 0) children[r.joints[j].parent].push_back(j);
-
-    // Nearest ancestor with vertices (for closure at the start).
-    auto ancestor_with_vertices = [&](int j) {
-      int p = r.joints[j].parent;
-      while (p >= 0 && count[p] == 0) p = r.joints[p].parent;
-      return p;
-    };
-
+    if (pass == 1 && !merge_failed_fits(r, bones_, partition_, refit)) break;
+    const JointParts parts = joint_parts(r, jp, partition_);
     int done = 0;
     for (int j = 0; j < nj; ++j) {
       if (pass == 1 && !refit[j]) continue;
-      BonePart& b = bones_[j];
-      b.fitted = false;
-      b.error.clear();
-      b.joint = j;
-      b.vertices = count[j];
-      const std::string name = r.name + ": joint '" + r.joints[j].name + "'";
-      if (count[j] == 0) {
-        b.error = "no vertices";
-        continue;
-      }
-      implicit::MeshPart part;
-      part.name = name;
-      std::vector<int> local(static_cast<std::size_t>(nv), -1);
-      for (int f : tris[j]) {
-        std::array<int, 3> t{};
-        for (int k = 0; k < 3; ++k) {
-          const int v = r.triangles(f, k);
-          if (local[v] < 0) {
-            local[v] = static_cast<int>(part.vertices.size());
-            part.vertices.push_back({r.rest(v, 0), r.rest(v, 1), r.rest(v, 2)});
-          }
-          t[static_cast<std::size_t>(k)] = local[v];
-        }
-        part.triangles.push_back(t);
-      }
-      if (part.triangles.empty()) {
-        b.error = "no triangles";
-        continue;
-      }
-      Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
-      for (const Vec3d& p : part.vertices) centroid += Eigen::Vector3d(p.x, p.y, p.z);
-      centroid /= double(part.vertices.size());
-      const Eigen::Vector3d start = jp[j];
-      const bool has_parent_part = ancestor_with_vertices(j) >= 0;
-      implicit::PartFitOptions o = setup.fit;
-      o.close_start = has_parent_part;
-      double extent = 0;
-      for (const Vec3d& p : part.vertices)
-        extent = std::max(extent, (Eigen::Vector3d(p.x, p.y, p.z) - start).norm());
-      Eigen::Vector3d seg0 = start, seg1;
-      if (!refit[j] && children[j].size() == 1 && (jp[children[j][0]] - start).norm() > 1e-3 * extent) {
-        seg1 = jp[children[j][0]];
-        o.close_end = count[children[j][0]] > 0;
-      } else {
-        Eigen::Vector3d dir = centroid - start;
-        if (dir.norm() < 0.1 * extent || !has_parent_part) {
-          // Principal axis of the vertices, oriented away from the parent.
-          Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-          for (const Vec3d& p : part.vertices) {
-            const Eigen::Vector3d d = Eigen::Vector3d(p.x, p.y, p.z) - centroid;
-            cov += d * d.transpose();
-          }
-          Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(cov);
-          dir = es.eigenvectors().col(2);
-          if (r.joints[j].parent >= 0 && dir.dot(start - jp[r.joints[j].parent]) < 0) dir = -dir;
-        }
-        dir.normalize();
-        double lo = 0, hi = 0;
-        for (const Vec3d& p : part.vertices) {
-          const double u = (Eigen::Vector3d(p.x, p.y, p.z) - start).dot(dir);
-          lo = std::min(lo, u);
-          hi = std::max(hi, u);
-        }
-        // Grow the segment so that the culling planes (at cull_h of its length) cut no vertex at
-        // an end without a joint.
-        const double margin = 2.0 * o.cull_h / (1.0 - 2.0 * o.cull_h) * (hi - lo) + 1e-6 * extent;
-        // Vertices well behind the joint (a root, or hips around their joint): no joint end.
-        if (!has_parent_part || lo < -0.25 * (hi - lo)) o.close_start = false;
-        if (!o.close_start) seg0 = start + dir * (lo - margin);
-        seg1 = start + dir * (hi + margin);
-        o.close_end = false;
-        // A branching part (hips, chest) has a hole at each child limb: close each like a bone
-        // end, along the child's direction (2013 §4.1 closes every joint of a part).
-        std::vector<int> openings, stack(children[j].rbegin(), children[j].rend());
-        while (!stack.empty()) {  // the nearest descendants with vertices (through merged joints)
-          const int c = stack.back();
-          stack.pop_back();
-          if (count[c] > 0)
-            openings.push_back(c);
-          else
-            stack.insert(stack.end(), children[c].rbegin(), children[c].rend());
-        }
-        for (int c : openings) {
-          Eigen::Vector3d cdir;
-          if (children[c].size() == 1 && (jp[children[c][0]] - jp[c]).norm() > 1e-3 * extent) {
-            cdir = jp[children[c][0]] - jp[c];
-          } else {
-            Eigen::Vector3d cc = Eigen::Vector3d::Zero();
-            int m = 0;
-            for (int v = 0; v < nv; ++v)
-              if (partition_[v] == c) cc += Eigen::Vector3d(r.rest(v, 0), r.rest(v, 1), r.rest(v, 2)), ++m;
-            cdir = cc / std::max(m, 1) - jp[c];
-          }
-          if (!(cdir.norm() > 1e-6 * extent)) continue;
-          cdir.normalize();
-          part.openings.push_back({{jp[c].x(), jp[c].y(), jp[c].z()}, {cdir.x(), cdir.y(), cdir.z()}});
-        }
-      }
-      part.bone_start = {seg0.x(), seg0.y(), seg0.z()};
-      part.bone_end = {seg1.x(), seg1.y(), seg1.z()};
-      b.start = seg0;
-      b.end = seg1;
-      // Heat weights have no visibility term, so a partition may hold patches of a neighbouring
-      // surface facing the bone (armpit, crotch); an HRBF through them has spurious far-field
-      // inside regions. Triangles facing the bone are dropped, more strictly on each retry, and
-      // the last try also drops the closure points (docs/skinning.md, "fitting").
-      const Eigen::Vector3d axis = seg1 - seg0;
-      auto facing = [&](const std::array<int, 3>& t) {
-        Eigen::Vector3d q[3];
-        for (int k = 0; k < 3; ++k) {
-          const Vec3d& v = part.vertices[static_cast<std::size_t>(t[static_cast<std::size_t>(k)])];
-          q[k] = Eigen::Vector3d(v.x, v.y, v.z);
-        }
-        const Eigen::Vector3d c = (q[0] + q[1] + q[2]) / 3.0, n = (q[1] - q[0]).cross(q[2] - q[0]);
-        const double u = std::clamp((c - seg0).dot(axis) / std::max(axis.squaredNorm(), 1e-300), 0.0, 1.0);
-        const Eigen::Vector3d radial = c - (seg0 + u * axis);
-        const double denom = n.norm() * radial.norm();
-        return denom > 0 ? n.dot(radial) / denom : 1.0;
-      };
-      const std::vector<std::array<int, 3>> all = part.triangles;
-      const double thresholds[] = {-0.2, 0.3, 0.3};
-      for (int attempt = 0; attempt < 3 && !b.fitted; ++attempt) {
-        part.triangles.clear();
-        for (const auto& t : all)
-          if (facing(t) > thresholds[attempt]) part.triangles.push_back(t);
-        implicit::PartFitOptions oa = o;
-        if (attempt == 2) oa.close_start = oa.close_end = false;
-        if (attempt == 2) part.openings.clear();
-        try {
-          b.fit = implicit::fit_part(part, oa);
-          b.fitted = true;
-          b.error.clear();
-        } catch (const InputError& e) {
-          if (attempt == 0) b.error = e.what();
-        }
-      }
-      if (progress) progress("fit", ++done, nj);
+      if (fit_joint(parts, setup, j, refit[j] != 0, bones_[j]) && progress) progress("fit", ++done, nj);
     }
   }
   fit_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

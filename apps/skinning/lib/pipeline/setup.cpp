@@ -76,6 +76,158 @@ void check_keys(const json& obj, std::initializer_list<const char*> keys, const 
   }
 }
 
+/// `tree`: "auto", "2013" or "2014".
+TreeKind tree_from_json(const json& j, const std::string& source) {
+  std::string tree = "auto";
+  read(j, "tree", tree, source);
+  if (tree == "2013") return TreeKind::k2013;
+  if (tree == "2014") return TreeKind::k2014;
+  require(tree == "auto", source + ".tree", "unknown tree '" + tree + "'", "use auto, 2013 or 2014");
+  return TreeKind::kAuto;
+}
+
+/// Section `joints`: operator and relaxation per joint name.
+void read_joints(const json& js, const std::string& source, SkinSetup& s) {
+  require(js.is_object(), source + ".joints", "must be an object keyed by joint name",
+          "see docs/skinning.md");
+  for (auto it = js.begin(); it != js.end(); ++it) {
+    const std::string w = source + ".joints." + it.key();
+    check_keys(it.value(), {"operator", "relaxation"}, w);
+    JointSettings js_;
+    std::string op = "auto";
+    read(it.value(), "operator", op, w);
+    js_.op = joint_operator_from_string(op, w + ".operator");
+    read(it.value(), "relaxation", js_.relaxation, w);
+    require(js_.relaxation >= 0 && js_.relaxation <= 1, w + ".relaxation",
+            "must be in [0, 1] (got " + format_number(js_.relaxation) + ")",
+            "0 = no tangential move, 1 = full");
+    s.joints[it.key()] = js_;
+  }
+}
+
+/// Section `fit`: the HRBF fit of each part (implicit::PartFitOptions).
+void read_fit(const json& f, const std::string& w, implicit::PartFitOptions& fit) {
+  check_keys(f, {"samples", "cull_h", "grid_resolution", "seed", "grid", "opening_offset"}, w);
+  read(f, "samples", fit.target_samples, w);
+  read(f, "cull_h", fit.cull_h, w);
+  read(f, "grid_resolution", fit.grid_resolution, w);
+  read(f, "seed", fit.seed, w);
+  read(f, "grid", fit.sample_grid, w);
+  read(f, "opening_offset", fit.opening_offset, w);
+  require(fit.opening_offset >= 0 && fit.opening_offset <= 2, w + ".opening_offset",
+          "must be in [0, 2] (got " + format_number(fit.opening_offset) + ")", "use 0.1 (the default)");
+  require(fit.target_samples >= 4 && fit.target_samples <= 2000, w + ".samples", "must be in [4, 2000]",
+          "the paper uses 50");
+  require(fit.grid_resolution >= 4 && fit.grid_resolution <= 256, w + ".grid_resolution",
+          "must be in [4, 256]", "the paper uses 32");
+}
+
+/// Section `operators`: grid operators and their controllers.
+void read_operators(const json& o, const std::string& w, SkinSetup& s) {
+  check_keys(o, {"resolution", "slices", "bulge_gate", "contact_controller", "bulge_controller"}, w);
+  read(o, "resolution", s.operator_resolution, w);
+  read(o, "bulge_gate", s.bulge_gate, w);
+  read(o, "contact_controller", s.contact_controller, w);
+  read(o, "bulge_controller", s.bulge_controller, w);
+  const std::vector<std::string> presets = operators::Controller::preset_names();
+  std::string list;
+  for (const auto& n : presets) list += (list.empty() ? "" : ", ") + n;
+  for (const auto& [key, name] :
+       {std::pair<std::string, std::string>{"contact_controller", s.contact_controller},
+        {"bulge_controller", s.bulge_controller}})
+    require(std::find(presets.begin(), presets.end(), name) != presets.end(), w + "." + key,
+            "unknown controller '" + name + "'", "use one of " + list);
+  read(o, "slices", s.operator_slices, w);
+  require(s.operator_resolution >= 8 && s.operator_resolution <= 1024, w + ".resolution",
+          "must be in [8, 1024]", "the paper uses 128");
+  require(s.operator_slices >= 8 && s.operator_slices <= 1024, w + ".slices", "must be in [8, 1024]",
+          "the paper uses 128");
+}
+
+/// Section `tracker`, the repairs: fold repair and orientation repair (track::TrackerOptions).
+void read_tracker_repairs(const json& t, const std::string& w, SkinSetup& s) {
+  read(t, "fold_repair_rounds", s.tracker.fold_repair.rounds, w);
+  read(t, "fold_repair_steps", s.tracker.fold_repair.steps, w);
+  read(t, "fold_repair_rings", s.tracker.fold_repair.rings, w);
+  read(t, "fold_repair_max_fraction", s.tracker.fold_repair.max_fraction, w);
+  read(t, "fold_repair_min_part_vertices", s.fold_repair_min_part_vertices, w);
+  require(s.fold_repair_min_part_vertices >= 0, w + ".fold_repair_min_part_vertices", "must be >= 0",
+          "use e.g. 50 (0: no limit)");
+  require(s.tracker.fold_repair.max_fraction >= 0 && s.tracker.fold_repair.max_fraction <= 1,
+          w + ".fold_repair_max_fraction", "must be in [0, 1]", "use e.g. 0.1");
+  require(s.tracker.fold_repair.rounds >= 0 && s.tracker.fold_repair.steps >= 0 &&
+              s.tracker.fold_repair.rings >= 0,
+          w + ".fold_repair_*", "must be >= 0", "use e.g. 8 rounds of 5 steps over 2 rings (0 rounds: off)");
+  track::OrientationRepairOptions& r = s.tracker.orientation_repair;
+  read(t, "orientation_repair_rounds", r.rounds, w);
+  read(t, "orientation_repair_max_move", r.max_move, w);
+  read(t, "orientation_repair_max_outward_move", r.max_outward_move, w);
+  require(r.rounds >= 0, w + ".orientation_repair_rounds", "must be >= 0", "use e.g. 8 (0: off)");
+  require(std::isfinite(r.max_move) && r.max_move > 0.f && r.max_move <= 4.f,
+          w + ".orientation_repair_max_move", "must be in (0, 4] (edge lengths)", "use e.g. 0.5");
+  require(std::isfinite(r.max_outward_move) && r.max_outward_move >= 0.f && r.max_outward_move <= r.max_move,
+          w + ".orientation_repair_max_outward_move", "must be in [0, orientation_repair_max_move]",
+          "use e.g. 0.125");
+}
+
+/// Section `tracker`: the 2014 tracker (track::TrackerOptions) and the axis guard.
+void read_tracker(const json& t, const std::string& w, SkinSetup& s) {
+  check_keys(t,
+             {"max_iterations", "tolerance", "sigma", "contact_angle_deg", "initial_newton_steps",
+              "smoothing_steps", "beta_diffusion_steps", "angle_contacts", "relaxation", "lazy_evaluation",
+              "fold_repair_rounds", "fold_repair_steps", "fold_repair_rings", "fold_repair_max_fraction",
+              "fold_repair_min_part_vertices", "orientation_repair_rounds", "orientation_repair_max_move",
+              "orientation_repair_max_outward_move", "axis_guard"},
+             w);
+  std::string relaxation = "jacobi";
+  read(t, "relaxation", relaxation, w);
+  if (relaxation == "cg")
+    s.tracker.relaxation = track::Relaxation::kConjugateGradient;
+  else
+    require(relaxation == "jacobi", w + ".relaxation", "unknown solver '" + relaxation + "'",
+            "use jacobi (2014) or cg");
+  read(t, "max_iterations", s.tracker.max_iterations, w);
+  read(t, "tolerance", s.tracker.tolerance, w);
+  read(t, "sigma", s.tracker.sigma, w);
+  read(t, "contact_angle_deg", s.tracker.contact_angle_deg, w);
+  read(t, "initial_newton_steps", s.tracker.initial_newton_steps, w);
+  read(t, "smoothing_steps", s.tracker.smoothing.smoothing_steps, w);
+  read(t, "beta_diffusion_steps", s.tracker.smoothing.beta_diffusion_steps, w);
+  read(t, "angle_contacts", s.tracker.angle_contacts, w);
+  read(t, "lazy_evaluation", s.tracker.lazy_evaluation, w);
+  read(t, "axis_guard", s.axis_guard, w);
+  read_tracker_repairs(t, w, s);
+}
+
+/// Section `projector`: the 2013 projection (track::ProjectorOptions).
+void read_projector(const json& p, const std::string& w, track::ProjectorOptions& projector) {
+  check_keys(p,
+             {"sigma", "max_iterations", "contact_angle_deg", "tolerance", "smoothing_steps",
+              "beta_diffusion_steps"},
+             w);
+  read(p, "sigma", projector.sigma, w);
+  read(p, "max_iterations", projector.max_iterations, w);
+  read(p, "contact_angle_deg", projector.contact_angle_deg, w);
+  read(p, "tolerance", projector.tolerance, w);
+  read(p, "smoothing_steps", projector.smoothing.smoothing_steps, w);
+  read(p, "beta_diffusion_steps", projector.smoothing.beta_diffusion_steps, w);
+}
+
+/// Section `substeps`: animation sub-stepping (SubstepOptions, 2014 §5.2).
+void read_substeps(const json& p, const std::string& w, SubstepOptions& substeps) {
+  check_keys(p, {"paper_rule", "fold_rule", "min_step_rad", "max_step_rad", "max_substeps"}, w);
+  read(p, "paper_rule", substeps.paper_rule, w);
+  read(p, "fold_rule", substeps.fold_rule, w);
+  read(p, "min_step_rad", substeps.min_step_rad, w);
+  read(p, "max_step_rad", substeps.max_step_rad, w);
+  read(p, "max_substeps", substeps.max_substeps, w);
+  require(substeps.min_step_rad > 0 && std::isfinite(substeps.min_step_rad), w + ".min_step_rad",
+          "must be > 0", "e.g. 0.05");
+  require(substeps.max_step_rad >= 0 && std::isfinite(substeps.max_step_rad), w + ".max_step_rad",
+          "must be >= 0 (0 = off)", "e.g. 0.05");
+  require(substeps.max_substeps >= 1, w + ".max_substeps", "must be >= 1", "e.g. 1000");
+}
+
 }  // namespace
 
 SkinSetup setup_from_json(const std::string& text, const std::string& source) {
@@ -95,155 +247,16 @@ SkinSetup setup_from_json(const std::string& text, const std::string& source) {
   read(j, "version", version, source);
   require(version == 1, source + ".version", "unsupported (got " + std::to_string(version) + ")",
           "use version 1");
-  std::string tree = "auto";
-  read(j, "tree", tree, source);
-  if (tree == "2013")
-    s.tree = TreeKind::k2013;
-  else if (tree == "2014")
-    s.tree = TreeKind::k2014;
-  else
-    require(tree == "auto", source + ".tree", "unknown tree '" + tree + "'", "use auto, 2013 or 2014");
+  s.tree = tree_from_json(j, source);
   std::string def = "auto";
   read(j, "default_operator", def, source);
   s.default_operator = joint_operator_from_string(def, source + ".default_operator");
-  if (j.contains("joints")) {
-    const json& js = j.at("joints");
-    require(js.is_object(), source + ".joints", "must be an object keyed by joint name",
-            "see docs/skinning.md");
-    for (auto it = js.begin(); it != js.end(); ++it) {
-      const std::string w = source + ".joints." + it.key();
-      check_keys(it.value(), {"operator", "relaxation"}, w);
-      JointSettings js_;
-      std::string op = "auto";
-      read(it.value(), "operator", op, w);
-      js_.op = joint_operator_from_string(op, w + ".operator");
-      read(it.value(), "relaxation", js_.relaxation, w);
-      require(js_.relaxation >= 0 && js_.relaxation <= 1, w + ".relaxation",
-              "must be in [0, 1] (got " + format_number(js_.relaxation) + ")",
-              "0 = no tangential move, 1 = full");
-      s.joints[it.key()] = js_;
-    }
-  }
-  if (j.contains("fit")) {
-    const json& f = j.at("fit");
-    const std::string w = source + ".fit";
-    check_keys(f, {"samples", "cull_h", "grid_resolution", "seed", "grid", "opening_offset"}, w);
-    read(f, "samples", s.fit.target_samples, w);
-    read(f, "cull_h", s.fit.cull_h, w);
-    read(f, "grid_resolution", s.fit.grid_resolution, w);
-    read(f, "seed", s.fit.seed, w);
-    read(f, "grid", s.fit.sample_grid, w);
-    read(f, "opening_offset", s.fit.opening_offset, w);
-    require(s.fit.opening_offset >= 0 && s.fit.opening_offset <= 2, w + ".opening_offset",
-            "must be in [0, 2] (got " + format_number(s.fit.opening_offset) + ")", "use 0.1 (the default)");
-    require(s.fit.target_samples >= 4 && s.fit.target_samples <= 2000, w + ".samples", "must be in [4, 2000]",
-            "the paper uses 50");
-    require(s.fit.grid_resolution >= 4 && s.fit.grid_resolution <= 256, w + ".grid_resolution",
-            "must be in [4, 256]", "the paper uses 32");
-  }
-  if (j.contains("operators")) {
-    const json& o = j.at("operators");
-    const std::string w = source + ".operators";
-    check_keys(o, {"resolution", "slices", "bulge_gate", "contact_controller", "bulge_controller"}, w);
-    read(o, "resolution", s.operator_resolution, w);
-    read(o, "bulge_gate", s.bulge_gate, w);
-    read(o, "contact_controller", s.contact_controller, w);
-    read(o, "bulge_controller", s.bulge_controller, w);
-    const std::vector<std::string> presets = operators::Controller::preset_names();
-    std::string list;
-    for (const auto& n : presets) list += (list.empty() ? "" : ", ") + n;
-    for (const auto& [key, name] :
-         {std::pair<std::string, std::string>{"contact_controller", s.contact_controller},
-          {"bulge_controller", s.bulge_controller}})
-      require(std::find(presets.begin(), presets.end(), name) != presets.end(), w + "." + key,
-              "unknown controller '" + name + "'", "use one of " + list);
-    read(o, "slices", s.operator_slices, w);
-    require(s.operator_resolution >= 8 && s.operator_resolution <= 1024, w + ".resolution",
-            "must be in [8, 1024]", "the paper uses 128");
-    require(s.operator_slices >= 8 && s.operator_slices <= 1024, w + ".slices", "must be in [8, 1024]",
-            "the paper uses 128");
-  }
-  if (j.contains("tracker")) {
-    const json& t = j.at("tracker");
-    const std::string w = source + ".tracker";
-    check_keys(t,
-               {"max_iterations", "tolerance", "sigma", "contact_angle_deg", "initial_newton_steps",
-                "smoothing_steps", "beta_diffusion_steps", "angle_contacts", "relaxation", "lazy_evaluation",
-                "fold_repair_rounds", "fold_repair_steps", "fold_repair_rings", "fold_repair_max_fraction",
-                "fold_repair_min_part_vertices", "orientation_repair_rounds", "orientation_repair_max_move",
-                "orientation_repair_max_outward_move", "axis_guard"},
-               w);
-    std::string relaxation = "jacobi";
-    read(t, "relaxation", relaxation, w);
-    if (relaxation == "cg")
-      s.tracker.relaxation = track::Relaxation::kConjugateGradient;
-    else
-      require(relaxation == "jacobi", w + ".relaxation", "unknown solver '" + relaxation + "'",
-              "use jacobi (2014) or cg");
-    read(t, "max_iterations", s.tracker.max_iterations, w);
-    read(t, "tolerance", s.tracker.tolerance, w);
-    read(t, "sigma", s.tracker.sigma, w);
-    read(t, "contact_angle_deg", s.tracker.contact_angle_deg, w);
-    read(t, "initial_newton_steps", s.tracker.initial_newton_steps, w);
-    read(t, "smoothing_steps", s.tracker.smoothing.smoothing_steps, w);
-    read(t, "beta_diffusion_steps", s.tracker.smoothing.beta_diffusion_steps, w);
-    read(t, "angle_contacts", s.tracker.angle_contacts, w);
-    read(t, "lazy_evaluation", s.tracker.lazy_evaluation, w);
-    read(t, "axis_guard", s.axis_guard, w);
-    read(t, "fold_repair_rounds", s.tracker.fold_repair.rounds, w);
-    read(t, "fold_repair_steps", s.tracker.fold_repair.steps, w);
-    read(t, "fold_repair_rings", s.tracker.fold_repair.rings, w);
-    read(t, "fold_repair_max_fraction", s.tracker.fold_repair.max_fraction, w);
-    read(t, "fold_repair_min_part_vertices", s.fold_repair_min_part_vertices, w);
-    require(s.fold_repair_min_part_vertices >= 0, w + ".fold_repair_min_part_vertices", "must be >= 0",
-            "use e.g. 50 (0: no limit)");
-    require(s.tracker.fold_repair.max_fraction >= 0 && s.tracker.fold_repair.max_fraction <= 1,
-            w + ".fold_repair_max_fraction", "must be in [0, 1]", "use e.g. 0.1");
-    require(s.tracker.fold_repair.rounds >= 0 && s.tracker.fold_repair.steps >= 0 &&
-                s.tracker.fold_repair.rings >= 0,
-            w + ".fold_repair_*", "must be >= 0",
-            "use e.g. 8 rounds of 5 steps over 2 rings (0 rounds: off)");
-    track::OrientationRepairOptions& r = s.tracker.orientation_repair;
-    read(t, "orientation_repair_rounds", r.rounds, w);
-    read(t, "orientation_repair_max_move", r.max_move, w);
-    read(t, "orientation_repair_max_outward_move", r.max_outward_move, w);
-    require(r.rounds >= 0, w + ".orientation_repair_rounds", "must be >= 0", "use e.g. 8 (0: off)");
-    require(std::isfinite(r.max_move) && r.max_move > 0.f && r.max_move <= 4.f,
-            w + ".orientation_repair_max_move", "must be in (0, 4] (edge lengths)", "use e.g. 0.5");
-    require(
-        std::isfinite(r.max_outward_move) && r.max_outward_move >= 0.f && r.max_outward_move <= r.max_move,
-        w + ".orientation_repair_max_outward_move", "must be in [0, orientation_repair_max_move]",
-        "use e.g. 0.125");
-  }
-  if (j.contains("projector")) {
-    const json& p = j.at("projector");
-    const std::string w = source + ".projector";
-    check_keys(p,
-               {"sigma", "max_iterations", "contact_angle_deg", "tolerance", "smoothing_steps",
-                "beta_diffusion_steps"},
-               w);
-    read(p, "sigma", s.projector.sigma, w);
-    read(p, "max_iterations", s.projector.max_iterations, w);
-    read(p, "contact_angle_deg", s.projector.contact_angle_deg, w);
-    read(p, "tolerance", s.projector.tolerance, w);
-    read(p, "smoothing_steps", s.projector.smoothing.smoothing_steps, w);
-    read(p, "beta_diffusion_steps", s.projector.smoothing.beta_diffusion_steps, w);
-  }
-  if (j.contains("substeps")) {
-    const json& p = j.at("substeps");
-    const std::string w = source + ".substeps";
-    check_keys(p, {"paper_rule", "fold_rule", "min_step_rad", "max_step_rad", "max_substeps"}, w);
-    read(p, "paper_rule", s.substeps.paper_rule, w);
-    read(p, "fold_rule", s.substeps.fold_rule, w);
-    read(p, "min_step_rad", s.substeps.min_step_rad, w);
-    read(p, "max_step_rad", s.substeps.max_step_rad, w);
-    read(p, "max_substeps", s.substeps.max_substeps, w);
-    require(s.substeps.min_step_rad > 0 && std::isfinite(s.substeps.min_step_rad), w + ".min_step_rad",
-            "must be > 0", "e.g. 0.05");
-    require(s.substeps.max_step_rad >= 0 && std::isfinite(s.substeps.max_step_rad), w + ".max_step_rad",
-            "must be >= 0 (0 = off)", "e.g. 0.05");
-    require(s.substeps.max_substeps >= 1, w + ".max_substeps", "must be >= 1", "e.g. 1000");
-  }
+  if (j.contains("joints")) read_joints(j.at("joints"), source, s);
+  if (j.contains("fit")) read_fit(j.at("fit"), source + ".fit", s.fit);
+  if (j.contains("operators")) read_operators(j.at("operators"), source + ".operators", s);
+  if (j.contains("tracker")) read_tracker(j.at("tracker"), source + ".tracker", s);
+  if (j.contains("projector")) read_projector(j.at("projector"), source + ".projector", s.projector);
+  if (j.contains("substeps")) read_substeps(j.at("substeps"), source + ".substeps", s.substeps);
   return s;
 }
 

@@ -98,13 +98,20 @@ std::vector<std::vector<Segment>> joint_segments(const Rig& rig, double leaf_fra
   return seg;
 }
 
-SkinWeights heat_weights(const track::Positions& rest, const track::Triangles& tris,
-                         const std::vector<std::vector<Segment>>& segments_per_joint,
-                         const HeatWeightOptions& options) {
+namespace {
+
+/// A bone segment with the joint it belongs to.
+using Bone = std::pair<int, Segment>;
+
+/// Per-vertex (joint, weight) candidates gathered from the solves.
+using Candidates = std::vector<std::vector<std::pair<int, float>>>;
+
+/// Rejects empty meshes, bad options, non-finite positions and out-of-range indices.
+void check_inputs(const track::Positions& rest, const track::Triangles& tris,
+                  const HeatWeightOptions& options) {
   const std::string& name = options.name;
   const int nv = static_cast<int>(rest.rows());
   const int nf = static_cast<int>(tris.rows());
-  const int nj = static_cast<int>(segments_per_joint.size());
   require(nv > 0, name + ": heat weights", "the mesh has no vertices", "give a triangle mesh");
   require(nf > 0, name + ": heat weights", "the mesh has no triangles",
           "give a triangle mesh (heat weights diffuse over triangles)");
@@ -121,8 +128,13 @@ SkinWeights heat_weights(const track::Positions& rest, const track::Triangles& t
       require(tris(f, k) >= 0 && tris(f, k) < nv, name + ": triangle " + std::to_string(f),
               "vertex index out of range (got " + std::to_string(tris(f, k)) + ")",
               "indices must lie in [0, " + std::to_string(nv) + ")");
+}
 
-  // Active bones.
+/// The bone segments of the joints not in `options.excluded_joints`, in joint order.
+std::vector<Bone> active_bones(const std::vector<std::vector<Segment>>& segments_per_joint,
+                               const HeatWeightOptions& options) {
+  const std::string& name = options.name;
+  const int nj = static_cast<int>(segments_per_joint.size());
   std::vector<char> excluded(static_cast<std::size_t>(nj), 0);
   for (int j : options.excluded_joints) {
     require(j >= 0 && j < nj, name + ": heat weights",
@@ -130,7 +142,7 @@ SkinWeights heat_weights(const track::Positions& rest, const track::Triangles& t
             "exclude joints in [0, " + std::to_string(nj) + ")");
     excluded[static_cast<std::size_t>(j)] = 1;
   }
-  std::vector<std::pair<int, Segment>> bones;
+  std::vector<Bone> bones;
   for (int j = 0; j < nj; ++j) {
     if (excluded[static_cast<std::size_t>(j)]) continue;
     for (const Segment& s : segments_per_joint[static_cast<std::size_t>(j)]) {
@@ -141,14 +153,28 @@ SkinWeights heat_weights(const track::Positions& rest, const track::Triangles& t
   }
   require(!bones.empty(), name + ": heat weights", "no joint has a bone segment",
           "give at least one joint that is not excluded a segment");
+  return bones;
+}
 
-  // Nearest bone(s) per vertex.
+/// Step 1's result: the heat `H_ii` and the joints defining `p` (CSR) per vertex.
+struct NearestBones {
+  std::vector<double> heat;  ///< `H_ii = c / max(d_i, ε)²`
+  std::vector<int> offsets;  ///< vertex i's nearest joints are `joints[offsets[i] .. offsets[i+1])`
+  std::vector<int> joints;   ///< ascending per vertex; `p_j(i) = 1/k` for each of these k
+};
+
+/// Step 1 (Baran & Popović 2007 §4): the nearest bone(s) of every vertex (ties within a relative
+/// 1e-9 shared) and the heat `H_ii = c / max(d_i, ε)²`, ε = 1e-4 × bounding-box diagonal.
+NearestBones nearest_bones(const track::Positions& rest, const std::vector<Bone>& bones,
+                           double heat_constant) {
+  const int nv = static_cast<int>(rest.rows());
   const Eigen::Vector3d lo = rest.colwise().minCoeff().cast<double>().transpose();
   const Eigen::Vector3d hi = rest.colwise().maxCoeff().cast<double>().transpose();
   const double eps = kMinDistanceRatio * std::max((hi - lo).norm(), 1e-12);
-  std::vector<double> heat(static_cast<std::size_t>(nv));
-  std::vector<int> near_offsets(static_cast<std::size_t>(nv) + 1, 0);
-  std::vector<int> near_joints;
+  NearestBones out;
+  out.heat.resize(static_cast<std::size_t>(nv));
+  out.offsets.assign(static_cast<std::size_t>(nv) + 1, 0);
+  std::vector<int>& near_joints = out.joints;
   std::vector<double> dist(bones.size());
   for (int v = 0; v < nv; ++v) {
     const Eigen::Vector3d p = rest.row(v).cast<double>().transpose();
@@ -164,13 +190,19 @@ SkinWeights heat_weights(const track::Positions& rest, const track::Triangles& t
                     bones[b].first) == near_joints.end())
         near_joints.push_back(bones[b].first);
     std::sort(near_joints.begin() + static_cast<std::ptrdiff_t>(first), near_joints.end());
-    near_offsets[static_cast<std::size_t>(v) + 1] = static_cast<int>(near_joints.size());
+    out.offsets[static_cast<std::size_t>(v) + 1] = static_cast<int>(near_joints.size());
     const double d = std::max(best, eps);
-    heat[static_cast<std::size_t>(v)] = options.heat_constant / (d * d);
+    out.heat[static_cast<std::size_t>(v)] = heat_constant / (d * d);
   }
+  return out;
+}
 
-  // Cotangent Laplacian (clamped) and lumped mass.
-  std::vector<double> mass(static_cast<std::size_t>(nv), 0.0);
+/// Step 2, the operators: the triplets of `−L` (cotangent Laplacian, every corner cotangent
+/// clamped to [0, 1e3]) over all vertices, and the lumped (area/3) mass added into `mass`.
+std::vector<Eigen::Triplet<double, int>> cotangent_laplacian(const track::Positions& rest,
+                                                             const track::Triangles& tris,
+                                                             std::vector<double>& mass) {
+  const int nf = static_cast<int>(tris.rows());
   std::vector<Eigen::Triplet<double, int>> trip;
   trip.reserve(static_cast<std::size_t>(nf) * 9);
   for (int f = 0; f < nf; ++f) {
@@ -190,75 +222,113 @@ SkinWeights heat_weights(const track::Positions& rest, const track::Triangles& t
       trip.emplace_back(j, j, w);
     }
   }
+  return trip;
+}
+
+/// Step 2's result: the system `(−L + M H) w_j = M H p_j` over the vertices used by a triangle.
+struct HeatSystem {
+  std::vector<double> mass;  ///< lumped mass per vertex, floored at 1e-6 × the mean where used
+  std::vector<char> used;    ///< per vertex: used by a triangle
+  std::vector<int> row;      ///< per vertex: its row in the system (-1: unused, left out)
+  int n{0};                  ///< rows
+  SpMat a;                   ///< `−L + M H`, symmetric positive definite
+};
+
+/// Step 2 (Baran & Popović 2007 §4): the symmetric system `−L + M H` of the used vertices, with
+/// masses floored at 1e-6 × the mean so vertices of zero-area triangles keep it definite.
+HeatSystem heat_system(const track::Positions& rest, const track::Triangles& tris,
+                       const std::vector<double>& heat) {
+  const int nv = static_cast<int>(rest.rows());
+  const int nf = static_cast<int>(tris.rows());
+  HeatSystem s;
+  s.mass.assign(static_cast<std::size_t>(nv), 0.0);
+  std::vector<double>& mass = s.mass;
+  std::vector<Eigen::Triplet<double, int>> trip = cotangent_laplacian(rest, tris, mass);
   // Vertices used by no triangle are left out of the system (their weights are p).
-  std::vector<char> used(static_cast<std::size_t>(nv), 0);
+  s.used.assign(static_cast<std::size_t>(nv), 0);
   for (int f = 0; f < nf; ++f)
-    for (int k = 0; k < 3; ++k) used[static_cast<std::size_t>(tris(f, k))] = 1;
-  std::vector<int> row(static_cast<std::size_t>(nv), -1);
+    for (int k = 0; k < 3; ++k) s.used[static_cast<std::size_t>(tris(f, k))] = 1;
+  s.row.assign(static_cast<std::size_t>(nv), -1);
   int n = 0;
   double mean_mass = 0;
   for (int v = 0; v < nv; ++v)
-    if (used[static_cast<std::size_t>(v)]) {
-      row[static_cast<std::size_t>(v)] = n++;
+    if (s.used[static_cast<std::size_t>(v)]) {
+      s.row[static_cast<std::size_t>(v)] = n++;
       mean_mass += mass[static_cast<std::size_t>(v)];
     }
   mean_mass /= n;
-  for (auto& t : trip) t = Eigen::Triplet<double, int>(row[t.row()], row[t.col()], t.value());
+  for (auto& t : trip) t = Eigen::Triplet<double, int>(s.row[t.row()], s.row[t.col()], t.value());
   for (int v = 0; v < nv; ++v)
-    if (used[static_cast<std::size_t>(v)]) {
+    if (s.used[static_cast<std::size_t>(v)]) {
       double& m = mass[static_cast<std::size_t>(v)];
       m = std::max(m, kMassFloor * std::max(mean_mass, 1e-300));
-      trip.emplace_back(row[static_cast<std::size_t>(v)], row[static_cast<std::size_t>(v)],
+      trip.emplace_back(s.row[static_cast<std::size_t>(v)], s.row[static_cast<std::size_t>(v)],
                         m * heat[static_cast<std::size_t>(v)]);
     }
-  SpMat a(n, n);
-  a.setFromTriplets(trip.begin(), trip.end());
-  trip.clear();
-  trip.shrink_to_fit();
-  const SpdSolver solver(a, name);
+  s.n = n;
+  s.a.resize(n, n);
+  s.a.setFromTriplets(trip.begin(), trip.end());
+  return s;
+}
 
-  // Which joints are nearest somewhere (the others get w = 0 without a solve).
+/// The joints nearest to some vertex, ascending (the others get w = 0 without a solve).
+std::vector<int> joints_to_solve(const NearestBones& near, int nj) {
   std::vector<int> solve_joints;
-  {
-    std::vector<char> seen(static_cast<std::size_t>(nj), 0);
-    for (int j : near_joints) seen[static_cast<std::size_t>(j)] = 1;
-    for (int j = 0; j < nj; ++j)
-      if (seen[static_cast<std::size_t>(j)]) solve_joints.push_back(j);
+  std::vector<char> seen(static_cast<std::size_t>(nj), 0);
+  for (int j : near.joints) seen[static_cast<std::size_t>(j)] = 1;
+  for (int j = 0; j < nj; ++j)
+    if (seen[static_cast<std::size_t>(j)]) solve_joints.push_back(j);
+  return solve_joints;
+}
+
+/// The right-hand sides `M H p_j` of the joints `solve_joints[start .. start + cols)`.
+Eigen::MatrixXd block_rhs(const HeatSystem& s, const NearestBones& near, const std::vector<int>& solve_joints,
+                          int start, int cols) {
+  const int nv = static_cast<int>(s.row.size());
+  Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(s.n, cols);
+  for (int v = 0; v < nv; ++v) {
+    const int r = s.row[static_cast<std::size_t>(v)];
+    if (r < 0) continue;
+    const int k0 = near.offsets[static_cast<std::size_t>(v)],
+              k1 = near.offsets[static_cast<std::size_t>(v) + 1];
+    for (int k = k0; k < k1; ++k) {
+      const int j = near.joints[static_cast<std::size_t>(k)];
+      for (int c = 0; c < cols; ++c)
+        if (solve_joints[static_cast<std::size_t>(start + c)] == j)
+          rhs(r, c) =
+              s.mass[static_cast<std::size_t>(v)] * near.heat[static_cast<std::size_t>(v)] / (k1 - k0);
+    }
   }
-  // Per-vertex accumulated (joint, weight) candidates.
-  std::vector<std::vector<std::pair<int, float>>> acc(static_cast<std::size_t>(nv));
+  return rhs;
+}
+
+/// Step 2, the solves: `w_j` for every joint nearest somewhere, `kBlock` joints per solve with
+/// the one factorisation; weights above 1e-7 become candidates. Vertices left out of the system
+/// get `p` as their candidates.
+Candidates solve_weights(const SpdSolver& solver, const HeatSystem& s, const NearestBones& near, int nj,
+                         const HeatWeightOptions& options) {
+  const int nv = static_cast<int>(s.row.size());
+  const std::vector<int> solve_joints = joints_to_solve(near, nj);
+  Candidates acc(static_cast<std::size_t>(nv));
   for (int v = 0; v < nv; ++v)
-    if (!used[static_cast<std::size_t>(v)]) {
-      const int k0 = near_offsets[static_cast<std::size_t>(v)],
-                k1 = near_offsets[static_cast<std::size_t>(v) + 1];
+    if (!s.used[static_cast<std::size_t>(v)]) {
+      const int k0 = near.offsets[static_cast<std::size_t>(v)],
+                k1 = near.offsets[static_cast<std::size_t>(v) + 1];
       for (int k = k0; k < k1; ++k)
-        acc[static_cast<std::size_t>(v)].emplace_back(near_joints[static_cast<std::size_t>(k)],
+        acc[static_cast<std::size_t>(v)].emplace_back(near.joints[static_cast<std::size_t>(k)],
                                                       1.0f / static_cast<float>(k1 - k0));
     }
   const int total = static_cast<int>(solve_joints.size());
   for (int start = 0; start < total; start += kBlock) {
     const int cols = std::min(kBlock, total - start);
-    Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(n, cols);
+    const Eigen::MatrixXd w = solver.solve(block_rhs(s, near, solve_joints, start, cols));
     for (int v = 0; v < nv; ++v) {
-      const int r = row[static_cast<std::size_t>(v)];
-      if (r < 0) continue;
-      const int k0 = near_offsets[static_cast<std::size_t>(v)],
-                k1 = near_offsets[static_cast<std::size_t>(v) + 1];
-      for (int k = k0; k < k1; ++k) {
-        const int j = near_joints[static_cast<std::size_t>(k)];
-        for (int c = 0; c < cols; ++c)
-          if (solve_joints[static_cast<std::size_t>(start + c)] == j)
-            rhs(r, c) = mass[static_cast<std::size_t>(v)] * heat[static_cast<std::size_t>(v)] / (k1 - k0);
-      }
-    }
-    const Eigen::MatrixXd w = solver.solve(rhs);
-    for (int v = 0; v < nv; ++v) {
-      const int r = row[static_cast<std::size_t>(v)];
+      const int r = s.row[static_cast<std::size_t>(v)];
       if (r < 0) continue;
       for (int c = 0; c < cols; ++c) {
         const double x = w(r, c);
-        require(std::isfinite(x), name + ": heat weights of vertex " + std::to_string(v), "are not finite",
-                "check the mesh for degenerate triangles");
+        require(std::isfinite(x), options.name + ": heat weights of vertex " + std::to_string(v),
+                "are not finite", "check the mesh for degenerate triangles");
         if (x > 1e-7)
           acc[static_cast<std::size_t>(v)].emplace_back(solve_joints[static_cast<std::size_t>(start + c)],
                                                         static_cast<float>(x));
@@ -266,8 +336,13 @@ SkinWeights heat_weights(const track::Positions& rest, const track::Triangles& t
     }
     if (options.progress) options.progress(start + cols, total);
   }
+  return acc;
+}
 
-  // Clamp, prune relative to the vertex's sum (always keep the largest), renormalise.
+/// Step 3: per vertex, clamp, drop the weights below `min_weight` of the vertex's sum (always
+/// keep the largest) and renormalise; joints ascending.
+SkinWeights prune_and_normalise(Candidates& acc, const NearestBones& near, float min_weight) {
+  const int nv = static_cast<int>(acc.size());
   SkinWeights out;
   out.offsets.reserve(static_cast<std::size_t>(nv) + 1);
   out.offsets.push_back(0);
@@ -286,15 +361,15 @@ SkinWeights heat_weights(const track::Positions& rest, const track::Triangles& t
     }
     if (!(sum > 0)) {
       // Underflow far from every bone (cannot happen with H > 0 everywhere): nearest bone.
-      best_j = near_joints[static_cast<std::size_t>(near_offsets[static_cast<std::size_t>(v)])];
+      best_j = near.joints[static_cast<std::size_t>(near.offsets[static_cast<std::size_t>(v)])];
       list.assign(1, {best_j, 1.0f});
       sum = 1;
     }
     double kept = 0;
     for (const auto& [j, x] : list)
-      if (x >= options.min_weight * sum || j == best_j) kept += x;
+      if (x >= min_weight * sum || j == best_j) kept += x;
     for (const auto& [j, x] : list)
-      if (x >= options.min_weight * sum || j == best_j) {
+      if (x >= min_weight * sum || j == best_j) {
         out.joints.push_back(j);
         out.weights.push_back(static_cast<float>(x / kept));
       }
@@ -303,6 +378,20 @@ SkinWeights heat_weights(const track::Positions& rest, const track::Triangles& t
     list.shrink_to_fit();
   }
   return out;
+}
+
+}  // namespace
+
+SkinWeights heat_weights(const track::Positions& rest, const track::Triangles& tris,
+                         const std::vector<std::vector<Segment>>& segments_per_joint,
+                         const HeatWeightOptions& options) {
+  check_inputs(rest, tris, options);
+  const std::vector<Bone> bones = active_bones(segments_per_joint, options);
+  const NearestBones near = nearest_bones(rest, bones, options.heat_constant);  // step 1
+  const HeatSystem system = heat_system(rest, tris, near.heat);                 // step 2
+  const SpdSolver solver(system.a, options.name);
+  Candidates acc = solve_weights(solver, system, near, static_cast<int>(segments_per_joint.size()), options);
+  return prune_and_normalise(acc, near, options.min_weight);  // step 3
 }
 
 SkinWeights heat_weights(const Rig& rig, HeatWeightOptions options) {

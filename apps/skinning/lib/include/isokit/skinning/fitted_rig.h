@@ -31,8 +31,8 @@ using Progress = std::function<void(const std::string&, int, int)>;
 struct BonePart {
   int joint{-1};
   int vertices{0};          ///< vertices in the joint's partition
-  Eigen::Vector3d start{};  ///< bone segment at rest (fit frame origin)
-  Eigen::Vector3d end{};
+  Eigen::Vector3d start{};  ///< bone segment at rest, mesh space: start (fit frame origin)
+  Eigen::Vector3d end{};    ///< and end (the fit frame's +z points from start to end)
   bool fitted{false};
   std::string error;         ///< why the joint has no primitive (no vertices, failed fit)
   int merged_into{-1};       ///< the joint that took this joint's vertices after a failed fit
@@ -63,8 +63,7 @@ class FittedRig {
 
 /// How far a primitive's inside reaches at rest, counted over the rest vertices with a field
 /// value above 0.5 by their joint in the partition: a primitive holding many vertices of
-/// unrelated joints reaches where it should not (e.g. a thigh primitive over the belly, which
-/// spoils every pose that moves the thigh; docs/skinning.md, "fitting").
+/// unrelated joints reaches where it should not (docs/skinning.md, "Checking a fit").
 struct PrimitiveCoverage {
   int joint{-1};
   int own{0};        ///< vertices of its partition (inside or not)
@@ -76,16 +75,15 @@ struct PrimitiveCoverage {
 /// primitive, and the joints whose nearest ancestor with a primitive this joint is.
 std::vector<PrimitiveCoverage> primitive_coverage(const FittedRig& fitted);
 
-/// Guard against vertices that crossed their own bone's axis (not in the papers; docs/skinning.md,
-/// "Decision: the axis guard"). Past what the field can fold (a joint bent to 170°: the limbs'
-/// fields merge), the tracker can push a vertex through its bone's axis; the Newton projection
-/// then takes it to the far side of its own limb, the limb flattens into a sheet and never comes
-/// back. A vertex at least half its primitive's `r` from the bone axis at rest whose radial
+/// Guard against vertices that crossed their own bone's axis, which past what the field can fold
+/// would flatten the limb for good (not in the papers; docs/skinning.md, "Decision: the axis
+/// guard"). A vertex at least half its primitive's `r` from the bone axis at rest whose radial
 /// direction in its primitive's frame now makes more than 90° with its rest radial direction is
 /// put back on its own side: the radial component along the rest one is set to `offset` times
 /// the rest one (the rest is kept).
 class AxisGuard {
  public:
+  /// \param offset fraction of the rest radial vector a crossed vertex is put back at (0.2).
   explicit AxisGuard(const FittedRig& fitted, double offset = 0.2);
   /// Moves the crossed vertices of `positions` (welded, posed by `skin`); returns how many.
   int apply(const std::vector<Affine>& skin, track::Positions& positions) const;

@@ -85,22 +85,25 @@ double bbox_diagonal(const track::Positions& positions);
 struct FrameMetrics {
   static constexpr double kNotComputed = std::numeric_limits<double>::quiet_NaN();
 
-  int self_intersections{-1};
-  int degenerate_faces{-1};
-  double volume{kNotComputed};
-  double volume_ratio{kNotComputed};  ///< volume / rest volume
-  double edge_distortion_mean{kNotComputed};
-  double edge_distortion_max{kNotComputed};
-  double max_displacement{kNotComputed};  ///< from the rest positions
-  double rest_distance{kNotComputed};     ///< max_displacement / rest bounding-box diagonal
+  int self_intersections{-1};                 ///< `count_self_intersections`
+  int degenerate_faces{-1};                   ///< `SelfIntersectionDetails::degenerate_count`
+  double volume{kNotComputed};                ///< `enclosed_volume`, mesh units³
+  double volume_ratio{kNotComputed};          ///< volume / rest volume
+  double edge_distortion_mean{kNotComputed};  ///< `EdgeDistortion::mean` from rest, no unit
+  double edge_distortion_max{kNotComputed};   ///< `EdgeDistortion::max` from rest, no unit
+  double max_displacement{kNotComputed};      ///< from the rest positions, mesh units
+  double rest_distance{kNotComputed};         ///< max_displacement / rest bounding-box diagonal
   // Field-based, filled by the pipeline:
-  int inverted_triangles{-1};
+  int inverted_triangles{-1};  ///< triangles whose normal points along +∇f (QUALITY.md "inverted")
   /// Inverted triangles that were not inverted at the rest pose (in concave regions the
-  /// composed field can disagree with the rest mesh already; docs/skinning.md "metrics").
+  /// composed field can disagree with the rest mesh already; docs/skinning.md "Inverted triangles
+  /// at rest").
   int new_inverted_triangles{-1};
+  /// `|f(x_i) − iso_i|` over the vertices not in contact (field units; iso_i = the vertex's
+  /// rest field value): largest and mean.
   double iso_residual_max{kNotComputed};
   double iso_residual_mean{kNotComputed};
-  int contact_vertices{-1};
+  int contact_vertices{-1};  ///< vertices flagged in contact (field, tracker or projector)
 };
 
 /// Worst of two frames, field by field (largest counts and errors, volume ratio farthest from 1;

@@ -34,25 +34,27 @@ using Colors = Eigen::Matrix<float, Eigen::Dynamic, 3, Eigen::RowMajor>;
 
 enum class Shading { Flat, Smooth };
 
+/// Options of `render_mesh`; colours are linear RGB in [0, 1]. Bad values throw InputError naming
+/// the option.
 struct RenderOptions {
-  int width{800}, height{800};
-  int supersample{2};                        ///< samples per pixel along each axis, 1..8
-  Eigen::Vector3d view_direction{0, 0, -1};  ///< camera looks along this (eye -> scene)
-  Eigen::Vector3d up{0, 1, 0};               ///< image up (made orthogonal to the view)
-  Eigen::AlignedBox3d frame;                 ///< box to frame; empty: the mesh's bounding box
-  double field_of_view_deg{30};              ///< vertical field of view, (0, 180)
-  double margin{0.05};                       ///< free border, fraction of the half image size
-  Shading shading{Shading::Smooth};
+  int width{800}, height{800};                      ///< image size in pixels, [1, 16384]
+  int supersample{2};                               ///< samples per pixel along each axis, [1, 8]
+  Eigen::Vector3d view_direction{0, 0, -1};         ///< camera looks along this (eye -> scene), non-zero
+  Eigen::Vector3d up{0, 1, 0};                      ///< image up (made orthogonal to the view), not along it
+  Eigen::AlignedBox3d frame;                        ///< box to frame; empty: the mesh's bounding box
+  double field_of_view_deg{30};                     ///< vertical field of view in degrees, (0, 180)
+  double margin{0.05};                              ///< free border, fraction of the half image size, [0, 1)
+  Shading shading{Shading::Smooth};                 ///< face normals, or interpolated vertex normals
   Eigen::Vector3f base_color{0.82f, 0.70f, 0.58f};  ///< front faces without given colours
   Eigen::Vector3f back_color{0.35f, 0.45f, 0.80f};  ///< back faces without given colours
-  Eigen::Vector3f background{1.0f, 1.0f, 1.0f};
-  Colors vertex_colors;  ///< `#V by 3`, interpolated; or empty
-  Colors face_colors;    ///< `#F by 3`, overrides `vertex_colors`; or empty
-  double ambient{0.18};  ///< light floor
-  double rim{0.25};      ///< strength of the silhouette brightening
-  bool wireframe{false};
+  Eigen::Vector3f background{1.0f, 1.0f, 1.0f};     ///< samples no triangle covers
+  Colors vertex_colors;                             ///< `#V by 3`, interpolated; or empty
+  Colors face_colors;                               ///< `#F by 3`, overrides `vertex_colors`; or empty
+  double ambient{0.18};   ///< light floor: colour × (ambient + (1 − ambient) × diffuse)
+  double rim{0.25};       ///< strength of the silhouette brightening (added to every channel)
+  bool wireframe{false};  ///< draw triangle edges over the shading
   Eigen::Vector3f wire_color{0.12f, 0.12f, 0.12f};
-  double wire_width_px{1.0};
+  double wire_width_px{1.0};  ///< wire width in pixels, ≥ 0
 };
 
 /// The pinhole camera `render_mesh` uses, for placing overlays and for tests.

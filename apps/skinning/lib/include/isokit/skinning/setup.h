@@ -40,57 +40,65 @@ enum class JointOperator { kAuto, kUnion, kBlend, kBulge, kContact };
 
 enum class TreeKind { kAuto, k2013, k2014 };
 
+/// Settings of one joint (setup key `joints.NAME`).
 struct JointSettings {
+  /// Operator between the joint's bone and its parent's; kAuto: `SkinSetup::default_operator`.
   JointOperator op{JointOperator::kAuto};
-  float relaxation{1.0f};  ///< tracker relaxation mask of the joint's vertices (2014 §5, [0, 1])
+  /// Tracker relaxation mask of the joint's vertices (2014 §5), in [0, 1]: 0 = no tangential move,
+  /// 1 (default) = full.
+  float relaxation{1.0f};
 };
 
-/// Animation sub-stepping (2014 §5.2): a step is split so that no joint rotates by more than a
-/// third of its current bending angle (`paper_rule`; the bending angle is floored at
-/// `3 * min_step_rad` so steps near the rest pose stay finite), nor (`fold_rule`) by more than a
-/// third of the angle left before its bones fold onto each other (π minus the bending angle,
-/// floored the same way), and by no more than `max_step_rad` (> 0 enables it; `--max-step-rad`).
-/// The paper's sentence reads both ways; `fold_rule` keeps the steps small where a fold closes
-/// (docs/skinning.md, "sub-steps").
+/// Animation sub-stepping (2014 §5.2; setup key `substeps`): an animation step is split into
+/// equal sub-steps so that no joint rotates by more than the limits below in one sub-step. The
+/// paper's rule reads two ways; both are applied (docs/skinning.md, "Decision: sub-steps near a
+/// closed fold").
 struct SubstepOptions {
+  /// At most a third of the joint's current bending angle (its rotation away from rest, floored
+  /// at `3 * min_step_rad`). 2014 §5.2. Default on.
   bool paper_rule{true};
+  /// At most a third of the angle left before the joint's bones fold onto each other (π minus
+  /// the bending angle, floored the same way). Not in the papers. Default on.
   bool fold_rule{true};
+  /// Radians, > 0: floor of both rules' angles (so steps out of the rest pose stay finite).
   double min_step_rad{0.05};
+  /// Radians, ≥ 0: largest rotation of a joint per sub-step; 0 = no limit (`--max-step-rad`).
   double max_step_rad{0.0};
-  int max_substeps{1000};
+  int max_substeps{1000};  ///< ≥ 1: most sub-steps per animation step
 };
 
 struct SkinSetup {
   std::string source{"defaults"};  ///< file name for messages
+  /// Composition tree; kAuto = each method's paper (2013 tree for implicit2013, 2014 tree for
+  /// tracking2014). Setup key `tree`.
   TreeKind tree{TreeKind::kAuto};
+  /// Operator of joints without their own; kAuto = contact in a 2014 tree, blend in a 2013 tree.
+  /// Setup key `default_operator`.
   JointOperator default_operator{JointOperator::kAuto};
-  std::map<std::string, JointSettings> joints;
-  implicit::PartFitOptions fit{};
-  int operator_resolution{128};  ///< 2014 §6.1: 128 × 128 × 128 operator grids
-  int operator_slices{128};
-  /// A `bulge` joint's controller is capped by the same controller of the joint's own bend angle
-  /// (the rotation between the two primitives relative to rest): `d = min(d_b(α), d_b(β))`. Not
-  /// in the papers: without it the bulge operator is active inside the limb at rest, where the
-  /// two primitives' caps overlap with gradients more than 90° apart, and skin that slides into
-  /// that internal valley during a bend stays there (docs/skinning.md, "Decision: the bulge
-  /// gate"). Setup key `operators.bulge_gate`.
+  std::map<std::string, JointSettings> joints;  ///< by joint name; absent joints: the defaults
+  implicit::PartFitOptions fit{};               ///< HRBF fit per part (2013 §4.1). Setup key `fit`
+  int operator_resolution{128};  ///< grid operator resolution per axis, [8, 1024] (2014 §6.1: 128)
+  int operator_slices{128};      ///< grid operator slices, [8, 1024] (2014 §6.1: 128)
+  /// Caps a `bulge` joint's controller by the same controller of the joint's own bend angle β (the
+  /// rotation between the two primitives relative to rest): `d = min(d_b(α), d_b(β))`, so at rest
+  /// the node is the clean union. Not in the papers (docs/skinning.md, "Decision: the bulge
+  /// gate"). Default on; setup key `operators.bulge_gate`.
   bool bulge_gate{true};
-  /// Controller presets (operators::Controller::preset) of the contact and bulge operators; setup
-  /// keys `operators.contact_controller`, `operators.bulge_controller` ("bulge2013" = the bulge
-  /// controller before 2026-12-01, at 1 from 90°: docs/operators.md).
+  /// Controller presets (operators::Controller::preset, docs/operators.md) of the contact and
+  /// bulge operators. Setup keys `operators.contact_controller`, `operators.bulge_controller`.
   std::string contact_controller{"contact"};
   std::string bulge_controller{"bulge"};
-  track::TrackerOptions tracker{};
-  track::ProjectorOptions projector{};
-  SubstepOptions substeps{};
+  track::TrackerOptions tracker{};      ///< the 2014 tracker. Setup key `tracker`
+  track::ProjectorOptions projector{};  ///< the 2013 projection. Setup key `projector`
+  SubstepOptions substeps{};            ///< setup key `substeps`
   /// tracking2014: put vertices that crossed their own bone's axis back on their side before each
-  /// sub-step (`AxisGuard`; not in the papers). Setup key `tracker.axis_guard`.
+  /// sub-step (`AxisGuard`; not in the papers; docs/skinning.md, "Decision: the axis guard").
+  /// Default on; setup key `tracker.axis_guard`.
   bool axis_guard{true};
   /// tracking2014: the fold repair (TrackerOptions::fold_repair) leaves alone the vertices of
-  /// parts with fewer vertices than this (0: no limit). A fold repair region (an inverted
-  /// triangle and two rings) holds 20 – 30 vertices; a part under about twice that is
-  /// under-resolved and smoothing would erase it (the 290-vertex Fox sample, 11 – 38 vertices per
-  /// part: volume 0.92 → 0.18 – 0.34 in its Survey clip). Setup key
+  /// parts with fewer vertices than this, ≥ 0 (0: no limit): a fold repair region holds 20 – 30
+  /// vertices, so smaller parts are under-resolved and smoothing would erase them. Not in the
+  /// papers (docs/skinning.md, "Known limits", low-poly rigs). Default 50; setup key
   /// `tracker.fold_repair_min_part_vertices`.
   int fold_repair_min_part_vertices{50};
 

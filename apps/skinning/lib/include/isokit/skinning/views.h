@@ -14,12 +14,13 @@
 
 namespace isokit::skinning {
 
+/// One picture of a bake: which frame, framed how.
 struct RenderView {
-  std::string label;
-  int frame{0};
-  Eigen::AlignedBox3d box;  ///< region to frame (empty: the whole mesh)
-  Eigen::Vector3d view_direction{0, 0, -1};
-  Eigen::Vector3d up{0, 1, 0};
+  std::string label;                         ///< column label in the contact sheet
+  int frame{0};                              ///< frame of the bake
+  Eigen::AlignedBox3d box;                   ///< region to frame (empty: the whole mesh)
+  Eigen::Vector3d view_direction{0, 0, -1};  ///< as RenderOptions::view_direction
+  Eigen::Vector3d up{0, 1, 0};               ///< as RenderOptions::up
 };
 
 /// For each bend: a close-up of its joint at `frame` (the vertices of the joint and its parent

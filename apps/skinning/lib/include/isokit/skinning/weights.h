@@ -17,10 +17,8 @@
 ///     dropped (the largest is always kept) and the rest renormalised to sum 1.
 ///
 /// Deviation from the paper: no visibility test (Baran & Popović set H_ii = 0 when the nearest
-/// bone is hidden from the vertex by the mesh). Cost: a vertex that is closer, through the air or
-/// through another body part, to a foreign bone than to its own (inner thighs near the other leg,
-/// a palm near the hip in an A-pose) is pulled toward that bone's weight; on meshes whose parts
-/// are farther apart than their own bone's distance (the procedural rigs) nothing changes.
+/// bone is hidden from the vertex by the mesh), so a vertex closer to a foreign bone than to its
+/// own takes some of that bone's weight (docs/skinning-procedural.md).
 ///
 /// Vertices used by no triangle get their weights straight from p (the nearest bone).
 /// The solver is CHOLMOD (LLᵀ) when isokit_skinning is built with it (ISOKIT_HAVE_CHOLMOD),
@@ -55,11 +53,12 @@ struct Segment {
 std::vector<std::vector<Segment>> joint_segments(const Rig& rig, double leaf_fraction = 0.5);
 
 struct HeatWeightOptions {
-  double heat_constant{1.0};         ///< c in `H_ii = c / d_i²` (Baran & Popović: 1)
-  float min_weight{0.01f};           ///< weights below this fraction of the vertex's sum are dropped
+  double heat_constant{1.0};  ///< c > 0 in `H_ii = c / d_i²` (Baran & Popović: 1)
+  float min_weight{0.01f};    ///< in [0, 1): weights below this fraction of the vertex's sum are dropped
   std::vector<int> excluded_joints;  ///< joints that get no weight (e.g. a root with no geometry)
-  std::function<void(int done, int total)> progress;  ///< called after each block of solves
-  std::string name{"mesh"};                           ///< names the mesh in error messages
+  /// Called after each block of solves with the joints solved so far and the joints to solve.
+  std::function<void(int done, int total)> progress;
+  std::string name{"mesh"};  ///< names the mesh in error messages
 };
 
 /// Heat-diffusion weights of the mesh `rest` (`#V by 3`), `tris` (`#F by 3`) for the joints whose
