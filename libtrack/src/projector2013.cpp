@@ -6,8 +6,14 @@
 #include <cmath>
 #include <numeric>
 
-#include "detail.h"
+#include "contact_smoothing.h"
+#include "field_eval.h"
+#include "isokit/core/error.h"
 #include "isokit/core/parallel.h"
+#include "mesh_geometry.h"
+#include "points.h"
+#include "statistics.h"
+#include "validation.h"
 
 namespace isokit::track {
 

@@ -30,6 +30,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "isokit/track/field.h"
@@ -37,6 +38,10 @@
 #include "isokit/track/tracker_options.h"
 
 namespace isokit::track {
+
+namespace detail {
+struct TrackerModel;
+}
 
 /// Stateful tracker: precomputes weights and adjacency, then tracks many times.
 class IsoSurfaceTracker {
@@ -47,6 +52,11 @@ class IsoSurfaceTracker {
   /// or invalid options.
   IsoSurfaceTracker(const Positions& rest, const Triangles& triangles, std::vector<float> iso,
                     TrackerOptions options = {});
+  IsoSurfaceTracker(const IsoSurfaceTracker& other);
+  IsoSurfaceTracker(IsoSurfaceTracker&& other) noexcept;
+  IsoSurfaceTracker& operator=(const IsoSurfaceTracker& other);
+  IsoSurfaceTracker& operator=(IsoSurfaceTracker&& other) noexcept;
+  ~IsoSurfaceTracker();
 
   /// Per-vertex relaxation mask in [0, 1] (0 = no tangential move; default all 1).
   /// \throw InputError for a wrong size or a value outside [0, 1].
@@ -70,30 +80,15 @@ class IsoSurfaceTracker {
   TrackStats track(const FieldFunction& field, const std::vector<Mat3f>& rotations, Positions& positions);
 
   /// Per-vertex flags of the last call, in the caller's vertex order.
-  const VertexFlags& flags() const { return flags_; }
+  const VertexFlags& flags() const;
   /// One-ring adjacency in the caller's vertex order (built on each call).
   Adjacency adjacency() const;
   /// Cotangent weights aligned with `adjacency().neighbors` (symmetric, ≥ 0; built on each call).
   std::vector<float> weights() const;
-  const TrackerOptions& options() const { return options_; }
+  const TrackerOptions& options() const;
 
  private:
-  // Everything per vertex below is in the internal order: internal vertex k is the caller's
-  // vertex order_[k] (empty: the same order), rank_ the inverse.
-  std::vector<int> order_, rank_;
-  Triangles triangles_;
-  std::vector<Vec3f> rest_pts_;
-  std::vector<float> iso_;
-  TrackerOptions options_;
-  Adjacency adj_;
-  std::vector<float> weights_, weight_sum_, max_step_, mask_;
-  std::vector<std::uint8_t> repair_mask_;  // fold repair: may move (empty: all)
-  std::vector<float> lazy_r2_;             // squared lazy evaluation radius per vertex
-  float diagonal_{0};
-  VertexFlags flags_;                        // caller's order
-  Adjacency vertex_faces_;                   // CSR: the triangles around each vertex
-  std::vector<std::uint8_t> rest_inverted_;  // per triangle (empty: none recorded)
-  std::vector<std::uint8_t> last_inverted_;  // per triangle, at the end of the last call
+  std::unique_ptr<detail::TrackerModel> model_;  // libtrack/src/track_state.h
 };
 
 }  // namespace isokit::track
