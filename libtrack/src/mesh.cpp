@@ -4,33 +4,9 @@
 #include <algorithm>
 #include <string>
 
-#include "detail.h"
-#include "isokit/core/error.h"
+#include "validation.h"
 
 namespace isokit::track {
-
-namespace detail {
-
-void validate_triangles(const Triangles& triangles, int num_vertices) {
-  require(num_vertices >= 0, "vertex_adjacency num_vertices",
-          "is negative (" + std::to_string(num_vertices) + ")", "pass the vertex count");
-  // Messages are built only on failure: this runs over every triangle of large meshes.
-  for (Eigen::Index f = 0; f < triangles.rows(); ++f) {
-    const int a = triangles(f, 0), b = triangles(f, 1), c = triangles(f, 2);
-    for (int v : {a, b, c})
-      if (v < 0 || v >= num_vertices)
-        require(false, "triangle " + std::to_string(f),
-                "vertex index " + std::to_string(v) + " is outside [0, " + std::to_string(num_vertices) + ")",
-                "fix the face list or pass all vertices");
-    if (a == b || b == c || a == c)
-      require(false, "triangle " + std::to_string(f),
-              "repeats a vertex (" + std::to_string(a) + ", " + std::to_string(b) + ", " + std::to_string(c) +
-                  ")",
-              "remove degenerate triangles before building the mesh");
-  }
-}
-
-}  // namespace detail
 
 Adjacency vertex_adjacency(const Triangles& triangles, int num_vertices) {
   detail::validate_triangles(triangles, num_vertices);

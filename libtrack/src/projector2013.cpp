@@ -6,8 +6,14 @@
 #include <cmath>
 #include <numeric>
 
-#include "detail.h"
+#include "contact_smoothing.h"
+#include "field_eval.h"
+#include "isokit/core/error.h"
 #include "isokit/core/parallel.h"
+#include "mesh_geometry.h"
+#include "points.h"
+#include "statistics.h"
+#include "validation.h"
 
 namespace isokit::track {
 
@@ -52,6 +58,18 @@ bool mean_value_coordinates(const std::vector<Vec3f>& d, const Vec3f& n, std::ve
   if (!(total > 0)) return false;
   for (std::size_t k = 0; k < m; ++k) phi[order[k]] = static_cast<float>(w[k] / total);
   return true;
+}
+
+// One MVC tangential relaxation of vertex i (2013 eq. 5): `v_i + μ Σ_j Φ_ij (q_ij - v_i)`, q_ij
+// the neighbour j projected onto the plane through v_i orthogonal to the unit normal n.
+Vec3f mvc_relaxed(const Adjacency& adj, const std::vector<float>& phi, const std::vector<Vec3f>& pts,
+                  std::size_t i, const Vec3f& n, float mu) {
+  Vec3f delta{};
+  for (int k = adj.offsets[i]; k < adj.offsets[i + 1]; ++k) {
+    const Vec3f e = pts[adj.neighbors[k]] - pts[i];
+    delta += (e - n * dot(e, n)) * phi[k];  // qij - vi
+  }
+  return pts[i] + delta * mu;
 }
 
 }  // namespace
@@ -100,14 +118,7 @@ void Projector2013::relax(const std::vector<Vec3f>& normals, float mu, Positions
   require(cur.size() == iso_.size() && normals.size() == iso_.size(), "relax inputs",
           "sizes differ from the mesh", "pass one position and normal per vertex");
   std::vector<Vec3f> out(cur.size());
-  for (std::size_t i = 0; i < cur.size(); ++i) {
-    Vec3f delta{};
-    for (int k = adj_.offsets[i]; k < adj_.offsets[i + 1]; ++k) {
-      const Vec3f e = cur[adj_.neighbors[k]] - cur[i];
-      delta += (e - normals[i] * dot(e, normals[i])) * phi_[k];  // qij - vi
-    }
-    out[i] = cur[i] + delta * mu;
-  }
+  for (std::size_t i = 0; i < cur.size(); ++i) out[i] = mvc_relaxed(adj_, phi_, cur, i, normals[i], mu);
   detail::from_points(out, positions);
 }
 
@@ -121,7 +132,7 @@ TrackStats Projector2013::project(const FieldFunction& field, Positions& positio
   std::vector<std::uint8_t> fc(n), done(n, 0);
   flags_.contact.assign(n, 0);
   flags_.lost.assign(n, 0);
-  const float cos_contact = std::cos(options_.contact_angle_deg * 3.14159265358979f / 180.f);
+  const float cos_contact = std::cos(options_.contact_angle_deg * kPiF / 180.f);
   const float min_g2 = options_.min_gradient * options_.min_gradient;
   const std::size_t grain = options_.grain;
 
@@ -172,12 +183,7 @@ TrackStats Projector2013::project(const FieldFunction& field, Positions& positio
             const float r = resid[i] - 1.f;
             mu = std::max(0.f, 1.f - r * r * r * r);
           }
-          Vec3f delta{};
-          for (int k = adj_.offsets[i]; k < adj_.offsets[i + 1]; ++k) {
-            const Vec3f ed = cur[adj_.neighbors[k]] - cur[i];
-            delta += (ed - normal[i] * dot(ed, normal[i])) * phi_[k];
-          }
-          next[i] = cur[i] + delta * mu;
+          next[i] = mvc_relaxed(adj_, phi_, cur, i, normal[i], mu);
         }
       });
       cur.swap(next);

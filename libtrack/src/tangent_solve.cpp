@@ -4,7 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "detail.h"
+#include "tangent_solve.h"
 
 namespace isokit::track::detail {
 

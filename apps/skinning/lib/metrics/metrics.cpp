@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <utility>
 
+#include "isokit/core/mesh_quality.h"
 #include "metrics/metrics_check.h"
 
 namespace isokit::skinning {
@@ -113,8 +114,10 @@ Eigen::AlignedBox3d bounding_box(const track::Positions& positions) {
 }
 
 double bbox_diagonal(const track::Positions& positions) {
-  const Eigen::AlignedBox3d box = bounding_box(positions);
-  return box.isEmpty() ? 0.0 : box.diagonal().norm();
+  return isokit::bbox_diagonal<double>(static_cast<std::size_t>(positions.rows()), [&](std::size_t v) {
+    const auto r = static_cast<Eigen::Index>(v);
+    return Vec3d{positions(r, 0), positions(r, 1), positions(r, 2)};
+  });
 }
 
 FrameMetrics worst_of(const FrameMetrics& a, const FrameMetrics& b) {

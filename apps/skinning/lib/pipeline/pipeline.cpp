@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "isokit/core/error.h"
+#include "isokit/core/mesh_quality.h"
 #include "isokit/core/parallel.h"
 #include "isokit/skinning/deform.h"
 #include "isokit/skinning/procedural.h"
@@ -62,17 +63,12 @@ std::vector<std::uint8_t> inverted_flags(const track::FieldFunction& f, const tr
   std::vector<Vec3f> c(n), g(n);
   std::vector<float> v(n);
   std::vector<std::uint8_t> contact(n, 0), out(n, 0);
-  for (std::size_t k = 0; k < n; ++k) {
-    const Eigen::Vector3f m = (p.row(t(k, 0)) + p.row(t(k, 1)) + p.row(t(k, 2))) / 3.f;
-    c[k] = {m.x(), m.y(), m.z()};
-  }
+  auto corner = [&](std::size_t k, int i) { return Vec3f{p(t(k, i), 0), p(t(k, i), 1), p(t(k, i), 2)}; };
+  for (std::size_t k = 0; k < n; ++k) c[k] = triangle_centroid(corner(k, 0), corner(k, 1), corner(k, 2));
   parallel_for(n, 1024, [&](std::size_t b, std::size_t e) {
     f(c.data() + b, e - b, v.data() + b, g.data() + b, contact.data() + b);
-    for (std::size_t k = b; k < e; ++k) {
-      const Eigen::Vector3f a = p.row(t(k, 0)), bb = p.row(t(k, 1)), cc = p.row(t(k, 2));
-      const Eigen::Vector3f nrm = (bb - a).cross(cc - a);
-      out[k] = nrm.x() * g[k].x + nrm.y() * g[k].y + nrm.z() * g[k].z > 0 ? 1 : 0;
-    }
+    for (std::size_t k = b; k < e; ++k)
+      out[k] = is_inverted(triangle_normal(corner(k, 0), corner(k, 1), corner(k, 2)), g[k]) ? 1 : 0;
   });
   return out;
 }

@@ -13,7 +13,7 @@
 
 #include "isokit/track/field.h"
 #include "isokit/track/mesh.h"
-#include "isokit/track/tracker.h"
+#include "isokit/track/tracker_options.h"
 
 namespace isokit::track {
 

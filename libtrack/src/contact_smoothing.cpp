@@ -1,0 +1,89 @@
+// SPDX-License-Identifier: MIT
+// Localised Laplacian smoothing (2013 §5, eq. 7; docs/tracking.md, 2014 tracker step 4).
+#include "contact_smoothing.h"
+
+#include <algorithm>
+
+#include "isokit/core/parallel.h"
+#include "mesh_geometry.h"
+#include "stages.h"
+
+namespace isokit::track::detail {
+
+namespace {
+
+// β_i <- (β_i + Σ_j β_j) / (1 + deg_i) over `region`, `steps` times (double-buffered).
+void diffuse_beta(const Adjacency& adj, const std::vector<int>& region, int steps, std::size_t grain,
+                  std::vector<float>& beta) {
+  std::vector<float> next(beta.size(), 0.f);
+  for (int s = 0; s < steps; ++s) {
+    parallel_for(region.size(), grain, [&](std::size_t b, std::size_t e) {
+      for (std::size_t a = b; a < e; ++a) {
+        const int i = region[a];
+        float acc = beta[i];
+        for (int k = adj.offsets[i]; k < adj.offsets[i + 1]; ++k) acc += beta[adj.neighbors[k]];
+        next[i] = acc / static_cast<float>(1 + adj.degree(i));
+      }
+    });
+    beta.swap(next);
+  }
+}
+
+// v_i <- (1 - β_i) v_i + β_i centroid(one-ring) over `region`, `steps` times (double-buffered).
+void smooth(const Adjacency& adj, const std::vector<int>& region, const std::vector<float>& beta, int steps,
+            std::size_t grain, std::vector<Vec3f>& pts) {
+  std::vector<Vec3f> buf(region.size());
+  for (int s = 0; s < steps; ++s) {
+    parallel_for(region.size(), grain, [&](std::size_t b, std::size_t e) {
+      for (std::size_t a = b; a < e; ++a) {
+        const int i = region[a];
+        const int deg = adj.degree(i);
+        if (beta[i] <= 0.f || deg == 0) {
+          buf[a] = pts[i];
+          continue;
+        }
+        const Vec3f c = ring_centroid(adj, pts, i, deg);
+        buf[a] = pts[i] * (1.f - beta[i]) + c * beta[i];
+      }
+    });
+    for (std::size_t a = 0; a < region.size(); ++a) pts[region[a]] = buf[a];
+  }
+}
+
+}  // namespace
+
+int contact_smoothing(const Adjacency& adj, const std::vector<std::uint8_t>& contact,
+                      const SmoothingOptions& options, std::size_t grain, std::vector<Vec3f>& pts,
+                      std::vector<float>& beta) {
+  const std::size_t n = pts.size();
+  beta.assign(n, 0.f);
+  // β is 0 beyond beta_diffusion_steps rings of the contact vertices: only that region is
+  // diffused and smoothed (the same arithmetic per vertex as a pass over every vertex).
+  std::vector<int> region;
+  std::vector<std::uint8_t> in(n, 0);
+  for (std::size_t i = 0; i < n; ++i)
+    if (contact[i]) in[i] = 1, region.push_back(static_cast<int>(i));
+  if (region.empty()) return 0;
+  grow_rings(adj, options.beta_diffusion_steps, region, in);
+  std::sort(region.begin(), region.end());
+  for (int i : region) beta[i] = contact[i] ? 1.f : 0.f;
+  diffuse_beta(adj, region, options.beta_diffusion_steps, grain, beta);
+  // Contact vertices keep β = 1 (2013: "β = 1 for vertices stopped at a gradient discontinuity").
+  for (int i : region)
+    if (contact[i]) beta[i] = 1.f;
+  smooth(adj, region, beta, options.smoothing_steps, grain, pts);
+  int count = 0;
+  for (int i : region) count += beta[i] > 0.f ? 1 : 0;
+  return count;
+}
+
+void smooth_contacts(TrackState& s) {
+  const TrackerOptions& o = s.m.options;
+  s.stats.smoothed_vertices =
+      contact_smoothing(s.m.adj, s.flags.contact, o.smoothing, o.grain, s.cur, s.flags.beta);
+  if (o.smoothing.smoothing_steps > 0)
+    for (std::size_t i = 0; i < s.n; ++i)
+      if (s.flags.beta[i] > 0.f) s.touched[i] = 1;
+}
+
+}  // namespace isokit::track::detail

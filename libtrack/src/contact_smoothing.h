@@ -1,0 +1,28 @@
+// SPDX-License-Identifier: MIT
+// Localised Laplacian smoothing at contacts with diffused β (2013 §5, eq. 7), shared by the 2013
+// projector and the 2014 tracker (not installed).
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "isokit/core/math.h"
+#include "isokit/track/mesh.h"
+#include "isokit/track/tracker_options.h"
+
+namespace isokit::track::detail {
+
+/// Diffuses β from the contact flags and applies the Laplacian smoothing (double-buffered).
+/// Returns the number of vertices with β > 0.
+int contact_smoothing(const Adjacency& adj, const std::vector<std::uint8_t>& contact,
+                      const SmoothingOptions& options, std::size_t grain, std::vector<Vec3f>& pts,
+                      std::vector<float>& beta);
+
+/// The one-ring centroid of vertex i (deg > 0), summed in neighbour order.
+inline Vec3f ring_centroid(const Adjacency& adj, const std::vector<Vec3f>& pts, int i, int deg) {
+  Vec3f c{};
+  for (int k = adj.offsets[i]; k < adj.offsets[i + 1]; ++k) c += pts[adj.neighbors[k]];
+  return c / static_cast<float>(deg);
+}
+
+}  // namespace isokit::track::detail
