@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 // HRBF fitting and composition-tree throughput: fit time per bone (HRBF + 32^3 grid, and the
-// HRBF alone), and tape evaluation (value + gradient) of a 24-bone 2014 tree of grid primitives
+// HRBF alone), and program evaluation (value + gradient) of a 24-bone 2014 tree of grid primitives
 // with grid contact operators, serial (one core) and parallel (TBB, all cores).
 #include <benchmark/benchmark.h>
 
@@ -10,8 +10,8 @@
 
 #include "isokit/core/math.h"
 #include "isokit/implicit/fit.h"
+#include "isokit/implicit/program_field.h"
 #include "isokit/implicit/skeleton.h"
-#include "isokit/implicit/tape.h"
 #include "isokit/operators/analytic.h"
 
 namespace {
@@ -61,7 +61,7 @@ BENCHMARK(BM_FitPart)->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond);
 
 /// 24 bones: a spine of 4 and 5 chains of 4 bones; grid primitives from one fitted limb.
 struct Rig {
-  std::shared_ptr<Tape> tape;
+  std::shared_ptr<ProgramField> field;
   std::vector<Vec3f> points;
 };
 
@@ -109,7 +109,7 @@ const Rig& rig() {
                                     operators::Controller::preset("contact"), "contact");
     std::vector<JointSetup> joints(s.parent.size(), JointSetup{contact, false});
     Rig out;
-    out.tape = std::make_shared<Tape>(build_tree_2014(s, joints));
+    out.field = std::make_shared<ProgramField>(build_tree_2014(s, joints));
     // Points near the skin: random points within 0.2 of a random bone.
     std::mt19937 rng(3);
     std::uniform_real_distribution<float> u(-1, 1), t(0, 1);
@@ -129,13 +129,13 @@ void BM_TreeEval(benchmark::State& state) {
   std::vector<FieldSample> out(r.points.size());
   const std::size_t grain = std::size_t(state.range(0));
   for (auto _ : state) {
-    r.tape->eval_batch(r.points.data(), r.points.size(), out.data(), grain);
+    r.field->eval_batch(r.points.data(), r.points.size(), out.data(), grain);
     benchmark::DoNotOptimize(out.data());
     benchmark::ClobberMemory();
   }
   state.SetItemsProcessed(state.iterations() * static_cast<int64_t>(r.points.size()));
-  state.SetLabel(std::to_string(r.tape->leaves().size()) + " leaves, " + std::to_string(r.tape->size()) +
-                 " instructions, grain " + std::to_string(grain));
+  state.SetLabel(std::to_string(r.field->program().leaves().size()) + " leaves, " +
+                 std::to_string(r.field->program().size()) + " instructions, grain " + std::to_string(grain));
 }
 BENCHMARK(BM_TreeEval)->Arg(0)->Arg(1024)->Unit(benchmark::kMillisecond)->UseRealTime();
 

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// DeviceTape, host side: uploads the tape's sparse records (pointers re-targeted to device
+// DeviceTape, host side: uploads a program's sparse records at a pose (pointers re-targeted to device
 // copies, shared arrays uploaded once) and calls the kernel in tape_kernels.cu.
 #include <map>
 #include <string>
@@ -76,10 +76,10 @@ struct DeviceTape::Impl {
   }
 };
 
-DeviceTape::DeviceTape(const Tape& tape) : impl_(std::make_unique<Impl>()) {
-  const TapeSparseLayout l = tape.sparse_layout();
+DeviceTape::DeviceTape(const Program& program, const Pose& pose) : impl_(std::make_unique<Impl>()) {
+  const TapeSparseLayout l = sparse_layout(program, pose);
   for (std::size_t k = 0; k < l.leaves; ++k)
-    require(l.leaf_records[k].grid.nodes != nullptr, "tape leaf " + std::to_string(k),
+    require(l.leaf_records[k].grid.nodes != nullptr, "program leaf " + std::to_string(k),
             "is not a sampled grid (only grid leaves run on the device)", "sample the primitives into grids");
   Impl& d = *impl_;
   d.leaf_count = l.leaves;
@@ -107,9 +107,9 @@ DeviceTape::DeviceTape(const Tape& tape) : impl_(std::make_unique<Impl>()) {
 
 DeviceTape::~DeviceTape() = default;
 
-void DeviceTape::update_transforms(const Tape& tape) {
-  const TapeSparseLayout l = tape.sparse_layout();
-  require(l.leaves == impl_->leaf_count, "tape", "has a different structure than the device copy",
+void DeviceTape::update_transforms(const Program& program, const Pose& pose) {
+  const TapeSparseLayout l = sparse_layout(program, pose);
+  require(l.leaves == impl_->leaf_count, "program", "has a different structure than the device copy",
           "build a new DeviceTape");
   impl_->upload_leaves(l);
 }

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
-// The tape kernel: one thread per point runs `eval_sparse_layout`, the host/device evaluator
-// that the CPU tests compare with `Tape::eval` bit for bit.
+// The program kernel: one thread per point runs `eval_sparse_layout`, the host/device evaluator
+// that the CPU tests compare with `SparseEvaluator::eval` bit for bit.
 #include <cuda_runtime.h>
 
 #include <stdexcept>

@@ -71,6 +71,11 @@ CompositionTree leaf(const SkeletonParts& s, int i) {
   return CompositionTree::leaf(s.parts[std::size_t(i)], s.transforms[std::size_t(i)], i);
 }
 
+/// The tag of the node that composes bone `child` with its parent's side.
+NodeTag joint_tag(int child, int parent, const std::vector<JointSetup>& joints) {
+  return NodeTag{child, parent, joints[std::size_t(child)].role};
+}
+
 CompositionTree balanced_max(std::vector<CompositionTree>& items, std::size_t lo, std::size_t hi) {
   if (hi - lo == 1) return items[lo];
   const std::size_t mid = lo + (hi - lo) / 2;
@@ -87,7 +92,8 @@ CompositionTree build_tree_2013(const SkeletonParts& s, const std::vector<JointS
   for (int c : t.discover) {
     const int p = s.parent[std::size_t(c)];
     if (p < 0) continue;
-    pairs.push_back(CompositionTree::node(joints[std::size_t(c)].op, leaf(s, p), leaf(s, c)));
+    pairs.push_back(
+        CompositionTree::node(joints[std::size_t(c)].op, leaf(s, p), leaf(s, c), joint_tag(c, p, joints)));
   }
   if (pairs.empty()) return leaf(s, t.root);
   return balanced_max(pairs, 0, pairs.size());
@@ -117,14 +123,15 @@ CompositionTree build_tree_2014(const SkeletonParts& s, const std::vector<JointS
     CompositionTree unit = leaf(s, b);
     const int q = partner[std::size_t(b)];
     if (q >= 0) {
-      unit = CompositionTree::node(joints[std::size_t(q)].op, unit, leaf(s, q));
+      unit = CompositionTree::node(joints[std::size_t(q)].op, unit, leaf(s, q), joint_tag(q, b, joints));
       members.push_back(q);
     }
     for (int m : members) {
       for (auto [e, end] = boost::out_edges(std::size_t(m), t.g); e != end; ++e) {
         const int c = int(boost::target(*e, t.g));
         if (c == q && m == b) continue;
-        unit = CompositionTree::node(joints[std::size_t(c)].op, unit, sub[std::size_t(c)]);
+        unit = CompositionTree::node(joints[std::size_t(c)].op, unit, sub[std::size_t(c)],
+                                     joint_tag(c, m, joints));
       }
     }
     sub[std::size_t(b)] = unit;

@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: MIT
-// Composition tree and tape: tape = recursive evaluation, pruning changes nothing, gradients
-// against finite differences (constant-d operators), rigid leaf updates, diagnostics, batch
-// agreement, and the 2013 / 2014 builders.
+// Composition tree, program, pose and evaluators: every evaluator = recursive evaluation, pruning
+// changes nothing, gradients against finite differences (constant-d operators), rigid leaf
+// updates through poses, diagnostics, batch agreement, and the 2013 / 2014 builders and their
+// node tags.
 #include <catch2/catch.hpp>
 
 #include <algorithm>
@@ -13,10 +14,11 @@
 
 #include "implicit/tree_fixtures.h"
 #include "isokit/core/error.h"
+#include "isokit/implicit/evaluators.h"
 #include "isokit/implicit/grid_field.h"
 #include "isokit/implicit/primitives.h"
+#include "isokit/implicit/program_field.h"
 #include "isokit/implicit/skeleton.h"
-#include "isokit/implicit/tape.h"
 #include "isokit/operators/analytic.h"
 #include "test_util.h"
 
@@ -28,22 +30,22 @@ using isokit::test::random_tree;
 using isokit::test::sampled_blend_grid;
 namespace ops = isokit::operators;
 
-namespace {}  // namespace
-
-TEST_CASE("tape evaluation equals recursive evaluation; pruning changes no result", "[tree]") {
+TEST_CASE("program evaluation equals recursive evaluation; pruning changes no result", "[tree]") {
   test::Rng rng(31);
   for (int trial = 0; trial < 8; ++trial) {
     const CompositionTree tree = random_tree(rng, rng.integer(1, 24), false);
-    const Tape tape(tree);
-    CHECK(tape.size() == tree.node_count());
-    std::vector<NodeDiagnostics> diag(tape.size());
+    const ProgramField field(tree);
+    const Program& program = field.program();
+    ScalarEvaluator scalar(program, field.pose());
+    CHECK(program.size() == tree.node_count());
+    std::vector<NodeDiagnostics> diag(program.size());
     int pruned = 0;
     for (int i = 0; i < 3000; ++i) {
       const Vec3f p = test::to_float(rng.vec(-3.5, 3.5));
       const FieldSample ref = tree.eval_recursive(p);
-      const FieldSample fast = tape.eval(p);
-      const FieldSample full = tape.eval(p, nullptr, false);
-      const FieldSample withdiag = tape.eval(p, diag.data(), true);
+      const FieldSample fast = field.eval(p);
+      const FieldSample full = scalar.eval(p, nullptr, false);
+      const FieldSample withdiag = scalar.eval(p, diag.data(), true);
       INFO("value " << fast.value << " vs " << ref.value << ", gradient " << fast.gradient.x << " "
                     << fast.gradient.y << " " << fast.gradient.z << " vs " << ref.gradient.x << " "
                     << ref.gradient.y << " " << ref.gradient.z);
@@ -53,7 +55,7 @@ TEST_CASE("tape evaluation equals recursive evaluation; pruning changes no resul
       REQUIRE(full.gradient == ref.gradient);
       REQUIRE(withdiag.value == ref.value);
       for (const auto& d : diag) pruned += d.evaluated ? 0 : 1;
-      if (!tape.support().contains(p)) CHECK(fast.value == 0.f);
+      if (!field.support().contains(p)) CHECK(fast.value == 0.f);
     }
     if (trial > 0) CHECK(pruned > 0);  // pruning did happen
   }
@@ -66,16 +68,16 @@ TEST_CASE("tree gradients agree with central differences (constant-d operators)"
   for (int trial = 0; trial < 4; ++trial) {
     // Analytic leaves: a grid's gradient is its interpolated stored gradient, not the derivative
     // of its trilinear value (see the grid tests).
-    const Tape tape(random_tree(rng, 10, true, 0));
+    const ProgramField field(random_tree(rng, 10, true, 0));
     for (int i = 0; i < 2000; ++i) {
       const Vec3d p = rng.vec(-3, 3);
-      const auto f = [&](const Vec3d& q) { return double(tape.eval(test::to_float(q)).value); };
+      const auto f = [&](const Vec3d& q) { return double(field.eval(test::to_float(q)).value); };
       const Vec3d fd = test::central_gradient(f, p, 2e-3);
       const Vec3d fd2 = test::central_gradient(f, p, 1e-3);
       // Skip points within a step of a kink (max ties, clamps): there the two steps disagree.
       if (norm(fd - fd2) > 0.02 * std::max(1.0, norm(fd))) continue;
       ++tested;
-      const Vec3d g = test::to_double(tape.eval(test::to_float(p)).gradient);
+      const Vec3d g = test::to_double(field.eval(test::to_float(p)).gradient);
       worst = std::max(worst, norm(g - fd) / std::max(1.0, norm(fd)));
     }
   }
@@ -84,19 +86,21 @@ TEST_CASE("tree gradients agree with central differences (constant-d operators)"
   CHECK(worst <= 0.03);
 }
 
-TEST_CASE("updating leaf transforms moves the field rigidly", "[tree]") {
+TEST_CASE("posing leaf transforms moves the field rigidly", "[tree]") {
   test::Rng rng(33);
   const CompositionTree tree = random_tree(rng, 12, false);
-  Tape tape(tree);
-  const Tape before(tree);
+  const auto program = std::make_shared<const Program>(tree);
+  const ProgramField before(program, std::make_shared<const Pose>(*program));
+  auto moved_pose = std::make_shared<Pose>(*program);
   const Rigid3f T = random_rigid(rng, 2.0);
-  for (std::size_t l = 0; l < tape.leaves().size(); ++l)
-    tape.set_leaf_transform(l, T * before.leaves()[l].local_to_world);
+  for (std::size_t l = 0; l < program->leaves().size(); ++l)
+    moved_pose->set_leaf_transform(*program, l, T * program->leaves()[l].local_to_world);
+  const ProgramField field = before.with_pose(moved_pose);
   double worst_v = 0, worst_g = 0;
   for (int i = 0; i < 3000; ++i) {
     const Vec3f p = test::to_float(rng.vec(-3, 3));
     const FieldSample a = before.eval(p);
-    const FieldSample b = tape.eval(T.apply(p));
+    const FieldSample b = field.eval(T.apply(p));
     worst_v = std::max(worst_v, double(std::abs(a.value - b.value)));
     worst_g = std::max(worst_g, double(norm(T.rotate(a.gradient) - b.gradient)));
   }
@@ -104,9 +108,10 @@ TEST_CASE("updating leaf transforms moves the field rigidly", "[tree]") {
   CHECK(worst_g <= 1e-3);
 
   // Moving one leaf equals rebuilding the tree with that leaf moved.
-  Tape one(tree);
+  auto one_pose = std::make_shared<Pose>(*program);
   const Rigid3f M = random_rigid(rng, 0.5);
-  one.set_transform_of(3, M);
+  one_pose->set_transform_of(*program, 3, M);
+  const ProgramField one = before.with_pose(one_pose);
   std::function<CompositionTree(const CompositionTree&)> moved = [&](const CompositionTree& t) {
     if (t.is_leaf()) return t.id() == 3 ? CompositionTree::leaf(t.field(), M, 3) : t;
     return CompositionTree::node(t.op(), moved(t.first()), moved(t.second()));
@@ -116,32 +121,40 @@ TEST_CASE("updating leaf transforms moves the field rigidly", "[tree]") {
     const Vec3f p = test::to_float(rng.vec(-3, 3));
     REQUIRE(one.eval(p).value == rebuilt.eval_recursive(p).value);
   }
-  CHECK_THROWS_AS(one.set_transform_of(99, M), InputError);
-  CHECK_THROWS_AS(one.set_leaf_transform(999, M), InputError);
+  CHECK_THROWS_AS(one_pose->set_transform_of(*program, 99, M), InputError);
+  CHECK_THROWS_AS(one_pose->set_leaf_transform(*program, 999, M), InputError);
+  // A pose belongs to its program.
+  const Program other(random_tree(rng, 5, false));
+  CHECK_THROWS_WITH(one_pose->set_transform_of(other, 3, M), Catch::Contains("another program"));
+  CHECK_THROWS_WITH(ScalarEvaluator(other, *one_pose), Catch::Contains("another program"));
+  CHECK_THROWS_WITH(ProgramField(std::make_shared<const Program>(other), one_pose),
+                    Catch::Contains("another program"));
 }
 
-TEST_CASE("tape diagnostics report alpha, d, the dominant operand and contact", "[tree]") {
+TEST_CASE("scalar evaluator diagnostics report alpha, d, the dominant operand and contact", "[tree]") {
   auto a = std::make_shared<const SphereField>(Vec3f{-0.3f, 0, 0}, 0.5f);
   auto b = std::make_shared<const SphereField>(Vec3f{0.3f, 0, 0}, 0.5f);
   const auto grid = sampled_blend_grid();
-  const Tape tape(
+  const Program program(
       CompositionTree::node(NodeOperator::grid_operator(grid, ops::Controller::preset("contact"), "g"),
                             CompositionTree::leaf(a), CompositionTree::leaf(b)));
-  std::vector<NodeDiagnostics> diag(tape.size());
+  const Pose pose(program);
+  ScalarEvaluator scalar(program, pose);
+  std::vector<NodeDiagnostics> diag(program.size());
   // On the x axis between the centres the gradients are opposite: α = π, d = 1, both inside.
-  tape.eval({0.05f, 0, 0}, diag.data(), true);
+  scalar.eval({0.05f, 0, 0}, diag.data(), true);
   CHECK(diag[2].alpha == Approx(kPi).margin(1e-3));
   CHECK(diag[2].d == Approx(1.0).margin(1e-3));
   CHECK(diag[2].on_contact == 1);
   CHECK(diag[2].dominant == 2);  // closer to b's centre
   // Far from b: a dominates, no contact.
-  tape.eval({-0.8f, 0.1f, 0}, diag.data(), true);
+  scalar.eval({-0.8f, 0.1f, 0}, diag.data(), true);
   CHECK(diag[2].dominant == 1);
   CHECK(diag[2].on_contact == 0);
   CHECK(diag[1].evaluated == 0);  // b's leaf pruned
   // Batch evaluation: every grain gives the same bits.
   test::Rng rng(34);
-  const Tape big(random_tree(rng, 20, false));
+  const ProgramField big(random_tree(rng, 20, false));
   std::vector<Vec3f> pts(20000);
   for (auto& p : pts) p = test::to_float(rng.vec(-3, 3));
   std::vector<FieldSample> s0(pts.size()), s1(pts.size());
@@ -161,29 +174,35 @@ TEST_CASE("a node's controller table can be replaced in place", "[tree]") {
     return CompositionTree::node(NodeOperator::grid_operator(grid, ops::Controller::preset(preset), "g"),
                                  CompositionTree::leaf(a), CompositionTree::leaf(b));
   };
-  Tape tape(tree_with("contact"));
-  const Tape zero(tree_with("constant0"));
-  CHECK(tape.controller(2).values[255] == Approx(1.f));
-  // The contact controller replaced by d ≡ 0: the same field as a tape built with it, through
-  // the sparse evaluator and the instruction loop.
-  tape.set_controller(2, ops::Controller::preset("constant0").table());
-  CHECK(tape.controller(2).values[255] == 0.f);
+  const auto program = std::make_shared<const Program>(tree_with("contact"));
+  Pose pose(*program);
+  const ProgramField zero(tree_with("constant0"));
+  CHECK(pose.controller(*program, 2).values[255] == Approx(1.f));
+  // The contact controller replaced by d ≡ 0: the same field as a program built with it, through
+  // the sparse evaluator and the instruction loop; the program keeps the tree's table.
+  pose.set_controller(*program, 2, ops::Controller::preset("constant0").table());
+  CHECK(pose.controller(*program, 2).values[255] == 0.f);
+  CHECK(program->controller(2).values[255] == Approx(1.f));
+  const ProgramField field(program, std::make_shared<const Pose>(pose));
+  ScalarEvaluator scalar(*program, field.pose());
   test::Rng rng(35);
-  std::vector<NodeDiagnostics> diag(tape.size());
+  std::vector<NodeDiagnostics> diag(program->size());
   for (int k = 0; k < 200; ++k) {
     const Vec3f p = test::to_float(rng.vec(-1, 1));
-    const FieldSample s = tape.eval(p), r = zero.eval(p);
+    const FieldSample s = field.eval(p), r = zero.eval(p);
     REQUIRE(s.value == r.value);
     REQUIRE(s.gradient == r.gradient);
-    REQUIRE(tape.eval(p, diag.data(), false).value == r.value);
+    REQUIRE(scalar.eval(p, diag.data(), false).value == r.value);
   }
-  CHECK_THROWS_WITH(tape.set_controller(0, ops::ControllerTable{}), Catch::Contains("not an inner node"));
-  CHECK_THROWS_WITH(tape.controller(3), Catch::Contains("tape instruction 3"));
+  CHECK_THROWS_WITH(pose.set_controller(*program, 0, ops::ControllerTable{}),
+                    Catch::Contains("not an inner node"));
+  CHECK_THROWS_WITH(pose.controller(*program, 3), Catch::Contains("program instruction 3"));
+  CHECK_THROWS_WITH(program->controller(3), Catch::Contains("program instruction 3"));
   ops::ControllerTable bad{};
   bad.values[7] = std::nanf("");
-  CHECK_THROWS_WITH(tape.set_controller(2, bad), Catch::Contains("outside [0, 1]"));
+  CHECK_THROWS_WITH(pose.set_controller(*program, 2, bad), Catch::Contains("outside [0, 1]"));
   bad.values[7] = 1.5f;
-  CHECK_THROWS_WITH(tape.set_controller(2, bad), Catch::Contains("outside [0, 1]"));
+  CHECK_THROWS_WITH(pose.set_controller(*program, 2, bad), Catch::Contains("outside [0, 1]"));
 }
 
 TEST_CASE("deep trees use a heap value stack with the same results", "[tree]") {
@@ -194,33 +213,35 @@ TEST_CASE("deep trees use a heap value stack with the same results", "[tree]") {
   for (int i = 1; i < 100; ++i)
     t = CompositionTree::node(NodeOperator::clean_union(),
                               CompositionTree::leaf(cap, random_rigid(rng, 1.0), i), t);
-  const Tape tape(t);
-  CHECK(tape.max_stack() == 100);
+  const ProgramField field(t);
+  CHECK(field.program().max_stack() == 100);
   for (int i = 0; i < 500; ++i) {
     const Vec3f p = test::to_float(rng.vec(-1.5, 1.5));
-    const FieldSample a = tape.eval(p), b = t.eval_recursive(p);
+    const FieldSample a = field.eval(p), b = t.eval_recursive(p);
     REQUIRE(a.value == b.value);
     REQUIRE(a.gradient == b.gradient);
   }
 }
 
-TEST_CASE("sparse tape evaluation equals the reference up to 63 leaves and beyond", "[tree][slow]") {
+TEST_CASE("sparse evaluation equals the reference up to 63 leaves and beyond", "[tree][slow]") {
   // Trees of up to 63 leaves take the sparse path (leaf boxes tested at once, only nodes with two
   // non-zero operands composed); larger trees the instruction loop. Both equal the recursive
   // reference and the instruction loop with pruning bit for bit, point by point and in batches.
   test::Rng rng(37);
   for (const int n : {2, 5, 62, 63, 64}) {
     const CompositionTree tree = random_tree(rng, n, false);
-    const Tape tape(tree);
+    const ProgramField field(tree);
+    ScalarEvaluator scalar(field.program(), field.pose());
+    CHECK(field.program().sparse() == (n <= 63));
     std::vector<Vec3f> pts(4001);
     for (auto& p : pts) p = test::to_float(rng.vec(-3.5, 3.5));
     std::vector<FieldSample> batch(pts.size()), serial(pts.size());
-    tape.eval_batch(pts.data(), pts.size(), batch.data(), 0);
-    tape.eval_batch(pts.data(), pts.size(), serial.data(), 7);
+    field.eval_batch(pts.data(), pts.size(), batch.data(), 0);
+    field.eval_batch(pts.data(), pts.size(), serial.data(), 7);
     for (std::size_t i = 0; i < pts.size(); ++i) {
       const FieldSample ref = tree.eval_recursive(pts[i]);
-      const FieldSample loop = tape.eval(pts[i], nullptr, true);
-      const FieldSample fast = tape.eval(pts[i]);
+      const FieldSample loop = scalar.eval(pts[i], nullptr, true);
+      const FieldSample fast = field.eval(pts[i]);
       INFO(n << " leaves, point " << i);
       REQUIRE(fast.value == ref.value);
       REQUIRE(fast.gradient == ref.gradient);
@@ -234,7 +255,7 @@ TEST_CASE("sparse tape evaluation equals the reference up to 63 leaves and beyon
   }
 }
 
-TEST_CASE("sparse tape evaluation on the faces of grid leaves' boxes", "[tree]") {
+TEST_CASE("sparse evaluation on the faces of grid leaves' boxes", "[tree]") {
   // Grid leaves placed by the identity and by quarter turns (exact in float): points exactly on
   // a box face, edge or corner are inside (the sparse path must test the box as eval_grid does).
   const auto cap = std::make_shared<const CapsuleField>(Vec3f{0, 0, 0}, Vec3f{0, 0, 0.5f}, 0.3f);
@@ -245,7 +266,7 @@ TEST_CASE("sparse tape evaluation on the faces of grid leaves' boxes", "[tree]")
   const CompositionTree tree = CompositionTree::node(
       NodeOperator::grid_operator(sampled_blend_grid(), ops::Controller::preset("contact"), "g"),
       CompositionTree::leaf(grid), CompositionTree::leaf(grid, turn));
-  const Tape tape(tree);
+  const ProgramField field(tree);
   const Box3f b = grid->support();
   test::Rng rng(38);
   int on_face = 0;
@@ -256,7 +277,7 @@ TEST_CASE("sparse tape evaluation on the faces of grid leaves' boxes", "[tree]")
       if (pick < 2) p[a] = pick == 0 ? b.lo[a] : b.hi[a];
     }
     if (rng.integer(0, 1)) p = turn.apply(p);  // on the second leaf's faces
-    const FieldSample ref = tree.eval_recursive(p), fast = tape.eval(p);
+    const FieldSample ref = tree.eval_recursive(p), fast = field.eval(p);
     on_face += ref.value != 0.f;
     REQUIRE(fast.value == ref.value);
     REQUIRE(fast.gradient == ref.gradient);
@@ -289,43 +310,83 @@ TEST_CASE("vectorised and scalar grid interpolation agree bit for bit", "[tree]"
   }
 }
 
-TEST_CASE("the host/device layout evaluator equals the tape bit for bit", "[tree]") {
+TEST_CASE("the host/device layout evaluator equals the sparse evaluator bit for bit", "[tree]") {
   // eval_sparse_layout is what the CUDA kernel runs per thread; on the host it must give the
-  // tape's own (vectorised) results exactly, for trees of grid leaves and every operator kind,
-  // and again after the leaves move.
+  // sparse evaluator's own (vectorised) results exactly, for trees of grid leaves and every
+  // operator kind, and again at another pose.
   test::Rng rng(5);
   for (int trial = 0; trial < 10; ++trial) {
-    Tape tape(random_tree(rng, rng.integer(2, 40), false, 1));
-    REQUIRE(tape.sparse());
+    const Program program(random_tree(rng, rng.integer(2, 40), false, 1));
+    REQUIRE(program.sparse());
+    Pose pose(program);
     for (int moved = 0; moved < 2; ++moved) {
-      const TapeSparseLayout layout = tape.sparse_layout();
+      const TapeSparseLayout layout = sparse_layout(program, pose);
+      const SparseEvaluator sparse(program, pose);
       int nonzero = 0;
       for (int k = 0; k < 3000; ++k) {
         const Vec3f p = test::to_float(rng.vec(-2.0, 2.0));
-        const FieldSample a = tape.eval(p), b = eval_sparse_layout(layout, p);
+        const FieldSample a = sparse.eval(p), b = eval_sparse_layout(layout, p);
         REQUIRE(a.value == b.value);
         REQUIRE(a.gradient == b.gradient);
         nonzero += a.value != 0.f;
       }
       CHECK(nonzero > 300);
-      for (std::size_t k = 0; k < tape.leaves().size(); ++k)
-        tape.set_leaf_transform(k, random_rigid(rng, 1.0));
+      for (std::size_t k = 0; k < program.leaves().size(); ++k)
+        pose.set_leaf_transform(program, k, random_rigid(rng, 1.0));
     }
   }
   const auto cap = std::make_shared<const CapsuleField>(Vec3f{0, 0, 0}, Vec3f{0, 0, 1}, 0.3f);
-  const Tape single(CompositionTree::leaf(cap, Rigid3f{}, 0));
-  CHECK_THROWS_WITH(single.sparse_layout(), Catch::Contains("not evaluated sparsely"));
+  const Program single(CompositionTree::leaf(cap, Rigid3f{}, 0));
+  const Pose single_pose(single);
+  CHECK_THROWS_WITH(sparse_layout(single, single_pose), Catch::Contains("not evaluated sparsely"));
+  CHECK_THROWS_WITH(SparseEvaluator(single, single_pose), Catch::Contains("not evaluated sparsely"));
 }
 
-TEST_CASE("a copied tape outlives the original", "[tree]") {
+TEST_CASE("a copied program outlives the original", "[tree]") {
   test::Rng rng(40);
   const CompositionTree tree = random_tree(rng, 12, false);
-  auto original = std::make_unique<Tape>(tree);
-  const Tape copy = *original;
+  auto original = std::make_unique<Program>(tree);
+  const Program copy = *original;
+  const Pose pose(*original);
   original.reset();  // the copy shares the padded grid operators
+  BatchEvaluator batch(copy, pose);
   for (int i = 0; i < 2000; ++i) {
     const Vec3f p = test::to_float(rng.vec(-3, 3));
-    REQUIRE(copy.eval(p).value == tree.eval_recursive(p).value);
+    FieldSample s;
+    batch.eval(&p, 1, &s);
+    REQUIRE(s.value == tree.eval_recursive(p).value);
+  }
+}
+
+TEST_CASE("one program, two poses: evaluators of both at once", "[tree]") {
+  // The same program read at two poses by batch evaluators on several threads: each pose gives
+  // what a program compiled from the tree moved to that pose gives.
+  test::Rng rng(41);
+  const CompositionTree tree = random_tree(rng, 16, false);
+  const auto program = std::make_shared<const Program>(tree);
+  auto moved = std::make_shared<Pose>(*program);
+  const Rigid3f T = random_rigid(rng, 1.0);
+  for (std::size_t l = 0; l < program->leaves().size(); ++l)
+    moved->set_leaf_transform(*program, l, T * program->leaves()[l].local_to_world);
+  const ProgramField rest(program, std::make_shared<const Pose>(*program)), posed = rest.with_pose(moved);
+  std::vector<Vec3f> pts(20000);
+  for (auto& p : pts) p = test::to_float(rng.vec(-3, 3));
+  std::vector<FieldSample> a(pts.size()), b(pts.size());
+  parallel_for(pts.size(), 512, [&](std::size_t begin, std::size_t end) {
+    BatchEvaluator ea(*program, rest.pose()), eb(*program, posed.pose());
+    ea.eval(pts.data() + begin, end - begin, a.data() + begin);
+    eb.eval(pts.data() + begin, end - begin, b.data() + begin);
+  });
+  std::vector<float> values(pts.size());
+  std::vector<Vec3f> gradients(pts.size());
+  BatchEvaluator(*program, posed.pose()).eval(pts.data(), pts.size(), values.data(), gradients.data());
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    REQUIRE(a[i].value == rest.eval(pts[i]).value);
+    const FieldSample s = posed.eval(pts[i]);
+    REQUIRE(b[i].value == s.value);
+    REQUIRE(b[i].gradient == s.gradient);
+    REQUIRE(values[i] == s.value);
+    REQUIRE(gradients[i] == s.gradient);
   }
 }
 
@@ -388,7 +449,7 @@ TEST_CASE("2013 builder: neighbouring pairs by their joint operator, then max", 
   CHECK(std::count_if(names.begin(), names.end(),
                       [](const std::string& n) { return n.rfind("gradient", 0) == 0; }) == 1);
   // The tree is the max over the pair fields.
-  const Tape tape(t);
+  const ProgramField field(t);
   test::Rng rng(35);
   for (int i = 0; i < 500; ++i) {
     const Vec3f p = test::to_float(rng.vec(-0.5, 3));
@@ -402,7 +463,7 @@ TEST_CASE("2013 builder: neighbouring pairs by their joint operator, then max", 
       const FieldSample g = pair.eval_recursive(p);
       expect = std::max(expect, g.value);
     }
-    REQUIRE(tape.eval(p).value == Approx(expect).margin(1e-6));
+    REQUIRE(field.eval(p).value == Approx(expect).margin(1e-6));
   }
 }
 
@@ -440,4 +501,65 @@ TEST_CASE("2014 builder: bulge pairs at the bottom, contact nodes up to one root
   cycle.parent = {-1, 2, 1, 2, 0};
   CHECK_THROWS_WITH(build_tree_2013(cycle, joints), Catch::Contains("not one tree"));
   CHECK_THROWS_AS(build_tree_2013(s, std::vector<JointSetup>(3)), InputError);
+}
+
+namespace {
+
+/// The bone ids under `t`, checking on the way that every inner node's tag names a skeleton
+/// edge with the child on one side and its parent on the other (or no joint: a 2013 max node).
+std::set<int> check_tags(const CompositionTree& t, const SkeletonParts& s,
+                         const std::vector<JointSetup>& joints, std::vector<NodeTag>& post_order) {
+  if (t.is_leaf()) {
+    post_order.push_back(NodeTag{});
+    return {t.id()};
+  }
+  const std::set<int> a = check_tags(t.first(), s, joints, post_order);
+  const std::set<int> b = check_tags(t.second(), s, joints, post_order);
+  const NodeTag& tag = t.tag();
+  post_order.push_back(tag);
+  if (tag.joint < 0) {
+    CHECK(t.op().kind == OpKind::Max);
+    CHECK(tag.role == NodeRole::None);
+  } else {
+    CHECK(s.parent[std::size_t(tag.joint)] == tag.parent);
+    CHECK(tag.role == joints[std::size_t(tag.joint)].role);
+    CHECK(t.op().name == joints[std::size_t(tag.joint)].op.name);
+    const bool across =
+        (a.count(tag.joint) && b.count(tag.parent)) || (b.count(tag.joint) && a.count(tag.parent));
+    CHECK(across);
+  }
+  std::set<int> all = a;
+  all.insert(b.begin(), b.end());
+  return all;
+}
+
+}  // namespace
+
+TEST_CASE("builders tag each joint's nodes with its skeleton edge; the program keeps the tags",
+          "[tree][builder]") {
+  const SkeletonParts s = arm_skeleton();
+  const auto grid = sampled_blend_grid();
+  const NodeOperator contact =
+      NodeOperator::grid_operator(grid, ops::Controller::preset("contact"), "contact");
+  const NodeOperator bulge = NodeOperator::grid_operator(grid, ops::Controller::preset("bulge"), "bulge");
+  std::vector<JointSetup> joints(5, JointSetup{contact, false, NodeRole::Contact});
+  joints[2] = JointSetup{bulge, true, NodeRole::Bulge};  // elbow and wrist: a chain of bulge joints
+  joints[3] = JointSetup{bulge, true, NodeRole::Bulge};
+  for (const bool y2014 : {false, true}) {
+    const CompositionTree t = y2014 ? build_tree_2014(s, joints) : build_tree_2013(s, joints);
+    std::vector<NodeTag> tags;
+    CHECK(check_tags(t, s, joints, tags).size() == 5);
+    const Program program(t);
+    REQUIRE(program.size() == tags.size());
+    int bulges = 0;
+    for (std::size_t i = 0; i < program.size(); ++i) {
+      CHECK(program.tag(i).joint == tags[i].joint);
+      CHECK(program.tag(i).parent == tags[i].parent);
+      CHECK(program.tag(i).role == tags[i].role);
+      bulges += program.tag(i).role == NodeRole::Bulge;
+    }
+    // 2013: one pair per bulge joint; 2014: the pair (upper arm, forearm) is at the bottom, the
+    // wrist (hand under the paired forearm) joins it by its own bulge node.
+    CHECK(bulges == 2);
+  }
 }

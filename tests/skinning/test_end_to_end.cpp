@@ -286,10 +286,10 @@ TEST_CASE("e2e: the bulge gate finds every bulge joint, chained ones too, in bot
       SkinField& field = sk.field(kind);
       auto closed = [&]() {
         int n = 0;
-        const auto& instr = field.tape().instructions();
+        const auto& instr = field.program().instructions();
         for (std::size_t i = 0; i < instr.size(); ++i)
           if (instr[i].leaf < 0 && instr[i].kind == isokit::implicit::OpKind::Grid &&
-              field.tape().controller(i).values[255] == 0.f)
+              field.pose().controller(field.program(), i).values[255] == 0.f)
             ++n;
         return n;
       };

@@ -10,6 +10,7 @@
 #include <numeric>
 
 #include "isokit/core/error.h"
+#include "isokit/implicit/evaluators.h"
 #include "isokit/implicit/skeleton.h"
 #include "isokit/operators/biharmonic.h"
 #include "isokit/operators/controller.h"
@@ -38,111 +39,122 @@ std::shared_ptr<const operators::GridOperator> cached_operator(const std::string
   return op;
 }
 
+/// The node operator of a joint, and its tag's role (2014: bulge joints form bulge pairs).
+implicit::JointSetup joint_setup(JointOperator op, const SkinSetup& setup, TreeKind kind,
+                                 const Progress& progress) {
+  implicit::JointSetup js;
+  switch (op) {
+    case JointOperator::kUnion:
+      js.op = implicit::NodeOperator::max();
+      js.role = implicit::NodeRole::Union;
+      break;
+    case JointOperator::kBlend:
+      js.op = implicit::NodeOperator::gradient_blend(operators::Controller::preset("blend2013"));
+      js.role = implicit::NodeRole::Blend;
+      break;
+    case JointOperator::kBulge:
+      js.op = implicit::NodeOperator::grid_operator(
+          cached_operator("bulge", setup.operator_resolution, setup.operator_slices, progress),
+          operators::Controller::preset(setup.bulge_controller), "bulge");
+      js.bulge_pair = kind == TreeKind::k2014;
+      js.role = implicit::NodeRole::Bulge;
+      break;
+    case JointOperator::kContact:
+    case JointOperator::kAuto:
+      js.op = implicit::NodeOperator::grid_operator(
+          cached_operator("contact", setup.operator_resolution, setup.operator_slices, progress),
+          operators::Controller::preset(setup.contact_controller), "contact");
+      js.role = implicit::NodeRole::Contact;
+      break;
+  }
+  return js;
+}
+
+/// Several roots: the later ones hang under the first.
+void hang_roots_under_first(std::vector<int>& parent) {
+  int first_root = -1;
+  for (std::size_t i = 0; i < parent.size(); ++i)
+    if (parent[i] < 0) {
+      if (first_root < 0)
+        first_root = static_cast<int>(i);
+      else
+        parent[i] = first_root;
+    }
+}
+
 }  // namespace
+
+/// The skeleton of the fitted joints (compressed: joints without a primitive left out).
+struct SkinField::Skeleton {
+  implicit::SkeletonParts parts;
+  std::vector<implicit::JointSetup> joints;
+};
 
 SkinField::SkinField(const FittedRig& fitted, const SkinSetup& setup, TreeKind tree, const Progress& progress)
     : fitted_(&fitted),
       kind_(tree == TreeKind::kAuto ? TreeKind::k2014 : tree),
       bulge_controller_(operators::Controller::preset(setup.bulge_controller)) {
-  const Rig& r = fitted.rig();
+  const Skeleton sk = compressed_skeleton(setup, progress);
+  const implicit::CompositionTree t = kind_ == TreeKind::k2013
+                                          ? implicit::build_tree_2013(sk.parts, sk.joints)
+                                          : implicit::build_tree_2014(sk.parts, sk.joints);
+  program_ = std::make_shared<const implicit::Program>(t);
+  rest_ = std::make_shared<const implicit::Pose>(*program_);
+  pose_ = rest_;
+  if (setup.bulge_gate) find_bulge_gates();
+}
+
+SkinField::Skeleton SkinField::compressed_skeleton(const SkinSetup& setup, const Progress& progress) {
+  const Rig& r = fitted_->rig();
   const int nj = static_cast<int>(r.joints.size());
-  // Compressed skeleton over fitted joints.
   std::vector<int> index(static_cast<std::size_t>(nj), -1);
-  implicit::SkeletonParts sk;
-  std::vector<implicit::JointSetup> joints;
+  Skeleton sk;
   for (int j = 0; j < nj; ++j) {
-    const BonePart& b = fitted.bones()[j];
+    const BonePart& b = fitted_->bones()[j];
     if (!b.fitted) continue;
-    const int p = fitted.primitive_parent(j);
-    index[j] = static_cast<int>(sk.parent.size());
-    sk.parent.push_back(p >= 0 ? index[p] : -1);
-    sk.parts.push_back(b.fit.field());
-    sk.transforms.push_back(to_rigid3f(to_affine(b.fit.local_to_world)));
+    const int p = fitted_->primitive_parent(j);
+    index[j] = static_cast<int>(sk.parts.parent.size());
+    sk.parts.parent.push_back(p >= 0 ? index[p] : -1);
+    sk.parts.parts.push_back(b.fit.field());
+    sk.parts.transforms.push_back(to_rigid3f(to_affine(b.fit.local_to_world)));
     joint_of_leaf_id_.push_back(j);
     const JointOperator op = setup.operator_for(r.joints[j].name, kind_);
     joint_ops_.push_back(r.joints[j].name + ": " + to_string(op));
-    implicit::JointSetup js;
-    switch (op) {
-      case JointOperator::kUnion:
-        js.op = implicit::NodeOperator::max();
-        break;
-      case JointOperator::kBlend:
-        js.op = implicit::NodeOperator::gradient_blend(operators::Controller::preset("blend2013"));
-        break;
-      case JointOperator::kBulge:
-        js.op = implicit::NodeOperator::grid_operator(
-            cached_operator("bulge", setup.operator_resolution, setup.operator_slices, progress),
-            operators::Controller::preset(setup.bulge_controller), "bulge");
-        js.bulge_pair = kind_ == TreeKind::k2014;
-        break;
-      case JointOperator::kContact:
-      case JointOperator::kAuto:
-        js.op = implicit::NodeOperator::grid_operator(
-            cached_operator("contact", setup.operator_resolution, setup.operator_slices, progress),
-            operators::Controller::preset(setup.contact_controller), "contact");
-        break;
-    }
-    joints.push_back(js);
+    sk.joints.push_back(joint_setup(op, setup, kind_, progress));
   }
-  // Several roots: hang the later ones under the first.
-  int first_root = -1;
-  for (std::size_t i = 0; i < sk.parent.size(); ++i)
-    if (sk.parent[i] < 0) {
-      if (first_root < 0)
-        first_root = static_cast<int>(i);
-      else
-        sk.parent[i] = first_root;
-    }
-  const implicit::CompositionTree t = kind_ == TreeKind::k2013 ? implicit::build_tree_2013(sk, joints)
-                                                               : implicit::build_tree_2014(sk, joints);
-  tape_ = std::make_shared<implicit::Tape>(t);
-  if (setup.bulge_gate) {
-    // The bulge nodes: grid instructions that join a bone's subtree to its primitive parent's
-    // (the one skeleton edge between the two operands' leaves), the child's joint using the bulge
-    // operator: the bulge pairs at the bottom of a 2014 tree and the pairs of a 2013 tree, and a
-    // bulge joint whose bones are already paired (a chain of bulge joints: every other one).
-    // Post-order: a stack of the operands' leaf joints.
-    const auto& instr = tape_->instructions();
-    std::vector<std::vector<int>> operands;
-    for (std::size_t i = 0; i < instr.size(); ++i) {
-      if (instr[i].leaf >= 0) {
-        operands.push_back({joint_of_leaf_id_[std::size_t(tape_->leaves()[std::size_t(instr[i].leaf)].id)]});
-        continue;
-      }
-      std::vector<int> second = std::move(operands.back());
-      operands.pop_back();
-      std::vector<int>& first = operands.back();
-      if (instr[i].kind == implicit::OpKind::Grid) {
-        auto in = [](const std::vector<int>& set, int j) {
-          return std::find(set.begin(), set.end(), j) != set.end();
-        };
-        bool found = false;
-        for (const auto* sides : {&first, &second}) {
-          const std::vector<int>& other = sides == &first ? second : first;
-          for (int child : *sides) {
-            const int parent = fitted.primitive_parent(child);
-            if (parent < 0 || !in(other, parent)) continue;
-            if (setup.operator_for(r.joints[std::size_t(child)].name, kind_) == JointOperator::kBulge)
-              gates_.push_back({i, fitted.bones()[std::size_t(parent)].joint,
-                                fitted.bones()[std::size_t(child)].joint, tape_->controller(i)});
-            found = true;
-            break;
-          }
-          if (found) break;
-        }
-      }
-      first.insert(first.end(), second.begin(), second.end());
-    }
+  hang_roots_under_first(sk.parts.parent);
+  return sk;
+}
+
+void SkinField::find_bulge_gates() {
+  // The bulge nodes, from the builders' tags: every node that composes a bulge joint, i.e. joins
+  // a bone's side to its primitive parent's across that one skeleton edge — the bulge pairs at
+  // the bottom of a 2014 tree and the pairs of a 2013 tree, and a bulge joint whose bones are
+  // already paired (a chain of bulge joints: every other one). A root hung under the first root
+  // has no primitive parent, and no gate.
+  const implicit::Program& program = *program_;
+  for (std::size_t i = 0; i < program.size(); ++i) {
+    const implicit::NodeTag& tag = program.tag(i);
+    if (program.instructions()[i].kind != implicit::OpKind::Grid || tag.role != implicit::NodeRole::Bulge ||
+        tag.joint < 0)
+      continue;
+    const int child = joint_of_leaf_id_[std::size_t(tag.joint)];
+    const int parent = fitted_->primitive_parent(child);
+    if (parent < 0) continue;
+    gates_.push_back({i, fitted_->bones()[std::size_t(parent)].joint,
+                      fitted_->bones()[std::size_t(child)].joint, program.controller(i)});
   }
 }
 
-void SkinField::set_pose(const std::vector<Affine>& skin) {
+std::shared_ptr<const implicit::Pose> SkinField::pose_of(const std::vector<Affine>& skin) const {
   const Rig& r = fitted_->rig();
   require(skin.size() == r.joints.size(), r.name + ": pose", "one skinning matrix per joint",
           "pass skinning_matrices()");
+  auto pose = std::make_shared<implicit::Pose>(*rest_);
   for (std::size_t i = 0; i < joint_of_leaf_id_.size(); ++i) {
     const BonePart& b = fitted_->bones()[joint_of_leaf_id_[i]];
-    tape_->set_transform_of(static_cast<int>(i), to_rigid3f(skin[b.joint] * to_affine(b.fit.local_to_world)));
+    pose->set_transform_of(*program_, static_cast<int>(i),
+                           to_rigid3f(skin[b.joint] * to_affine(b.fit.local_to_world)));
   }
   for (const BulgeGate& g : gates_) {
     // The bend: the rotation angle between the two joints' skinning rotations (0 at rest).
@@ -152,40 +164,42 @@ void SkinField::set_pose(const std::vector<Affine>& skin) {
     const float cap = static_cast<float>(bulge_controller_.eval(std::acos(c)));
     operators::ControllerTable t = g.base;
     for (float& v : t.values) v = std::min(v, cap);
-    tape_->set_controller(g.instruction, t);
+    pose->set_controller(*program_, g.instruction, t);
   }
+  return pose;
 }
 
-track::FieldFunction SkinField::function(bool contacts) const {
-  std::shared_ptr<const implicit::Tape> tape = tape_;
+void SkinField::set_pose(const std::vector<Affine>& skin) {
+  pose_ = pose_of(skin);
+}
+
+track::FieldFunction SkinField::function(std::shared_ptr<const implicit::Pose> pose, bool contacts) const {
+  require(pose != nullptr && pose->fits(*program_), fitted_->rig().name + ": field pose",
+          "is not a pose of this field's program", "make it with SkinField::pose_of");
+  std::shared_ptr<const implicit::Program> program = program_;
   if (!contacts) {
-    // Fast path: the tape's batched sparse evaluator (no per-node diagnostics).
-    return [tape](const Vec3f* p, std::size_t n, float* values, Vec3f* gradients, std::uint8_t*) {
-      thread_local std::vector<implicit::FieldSample> out;
-      out.resize(n);
-      tape->eval_batch(p, n, out.data(), 0);
-      for (std::size_t k = 0; k < n; ++k) {
-        values[k] = out[k].value;
-        gradients[k] = out[k].gradient;
-      }
+    // Fast path: the batched sparse evaluator (no per-node diagnostics).
+    return [program, pose](const Vec3f* p, std::size_t n, float* values, Vec3f* gradients, std::uint8_t*) {
+      implicit::BatchEvaluator(*program, *pose).eval(p, n, values, gradients);
     };
   }
-  return [tape](const Vec3f* p, std::size_t n, float* values, Vec3f* gradients, std::uint8_t* contact) {
-    thread_local std::vector<implicit::NodeDiagnostics> diag;
-    diag.resize(tape->size());
-    const auto& instr = tape->instructions();
-    for (std::size_t k = 0; k < n; ++k) {
-      const implicit::FieldSample s = tape->eval(p[k], contact ? diag.data() : nullptr, true);
-      values[k] = s.value;
-      gradients[k] = s.gradient;
-      if (contact) {
-        std::uint8_t c = 0;
-        for (std::size_t i = 0; i < instr.size(); ++i)
-          if (instr[i].leaf < 0 && diag[i].evaluated && diag[i].on_contact) c = 1;
-        contact[k] = c;
-      }
-    }
-  };
+  return
+      [program, pose](const Vec3f* p, std::size_t n, float* values, Vec3f* gradients, std::uint8_t* contact) {
+        implicit::ScalarEvaluator eval(*program, *pose);
+        std::vector<implicit::NodeDiagnostics> diag(program->size());
+        const auto& instr = program->instructions();
+        for (std::size_t k = 0; k < n; ++k) {
+          const implicit::FieldSample s = eval.eval(p[k], contact ? diag.data() : nullptr, true);
+          values[k] = s.value;
+          gradients[k] = s.gradient;
+          if (contact) {
+            std::uint8_t c = 0;
+            for (std::size_t i = 0; i < instr.size(); ++i)
+              if (instr[i].leaf < 0 && diag[i].evaluated && diag[i].on_contact) c = 1;
+            contact[k] = c;
+          }
+        }
+      };
 }
 
 }  // namespace isokit::skinning

@@ -113,11 +113,13 @@ SkinField& Skinner::field(TreeKind kind) {
 
 FrameMetrics Skinner::measure(const Pose& pose, const track::Positions& positions, bool self_intersections,
                               const std::vector<std::uint8_t>* contact) {
-  if (!metrics_field_) {
-    metrics_field_ = std::make_unique<SkinField>(*fitted_, setup_, TreeKind::k2014, progress_);
-    metrics_field_->set_pose(skinning_matrices(rig_, rest_pose(rig_)));
-    iso2014_ = track::sample_iso_values(metrics_field_->function(), rig_.rest);
-    rest_inverted_ = inverted_flags(metrics_field_->function(), rig_.rest, rig_.triangles);
+  // The field metrics use the 2014 tree at their own poses (the tracker's pose is left alone).
+  const SkinField& metrics_field = field(TreeKind::k2014);
+  if (iso2014_.empty()) {
+    const track::FieldFunction rest =
+        metrics_field.function(metrics_field.pose_of(skinning_matrices(rig_, rest_pose(rig_))));
+    iso2014_ = track::sample_iso_values(rest, rig_.rest);
+    rest_inverted_ = inverted_flags(rest, rig_.rest, rig_.triangles);
   }
   FrameMetricsEvaluator* ev = evaluator_.get();
   FrameMetrics m;
@@ -133,8 +135,8 @@ FrameMetrics Skinner::measure(const Pose& pose, const track::Positions& position
     m.max_displacement = max_displacement(rig_.rest, positions);
     m.rest_distance = m.max_displacement / ev->rest_diagonal();
   }
-  metrics_field_->set_pose(skinning_matrices(rig_, pose));
-  const track::FieldFunction f = metrics_field_->function(true);
+  const track::FieldFunction f =
+      metrics_field.function(metrics_field.pose_of(skinning_matrices(rig_, pose)), true);
   const std::vector<std::uint8_t> inv = inverted_flags(f, positions, rig_.triangles);
   m.inverted_triangles = 0;
   m.new_inverted_triangles = 0;

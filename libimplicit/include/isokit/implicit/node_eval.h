@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 /// \file
-/// Per-node composition math of the tape (plain data, `ISOKIT_HOSTDEV`, shared with CUDA).
+/// Per-node composition math of the evaluators (plain data, `ISOKIT_HOSTDEV`, shared with CUDA).
 ///
 /// A node combines its operands `a`, `b` (value + gradient) with `g(fa, fb; d)`,
 /// `d = controller(α)`, `α = angle(∇fa, ∇fb)` (0 when a gradient vanishes), and gradient

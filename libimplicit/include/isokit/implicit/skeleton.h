@@ -4,8 +4,12 @@
 /// by parent indices; its topology is walked with Boost.Graph inside the library.
 ///
 /// Bone `i`'s primitive is `parts[i]` (local frame) placed by `transforms[i]`; every leaf gets
-/// id `i`, so `Tape::set_transform_of(i, T)` moves bone `i`. The joint of bone `i` is the one it
-/// shares with its parent, and `joints[i]` chooses its operator (ignored for the root).
+/// id `i`, so `Pose::set_transform_of(program, i, T)` moves bone `i`. The joint of bone `i` is the
+/// one it shares with its parent, and `joints[i]` chooses its operator (ignored for the root).
+///
+/// Node tags: every node made for joint `i` is tagged `{i, parent[i], joints[i].role}`; its two
+/// operands meet across that skeleton edge alone (bone `i` in one operand, its parent in the
+/// other). The 2013 tree's `max` nodes over the pairs have the default tag.
 #pragma once
 
 #include <vector>
@@ -24,6 +28,9 @@ struct JointSetup {
   NodeOperator op = NodeOperator::max();
   /// 2014 only: compose this bone with its parent at the bottom of the tree (bulge pair).
   bool bulge_pair = false;
+  /// What `op` is for at this joint, copied into the tags of the joint's nodes (not read by the
+  /// builders or the evaluation). Default: `NodeRole::None`.
+  NodeRole role = NodeRole::None;
 };
 
 /// 2013: every (parent, child) pair composed by the child's joint operator, then a balanced

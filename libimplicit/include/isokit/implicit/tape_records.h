@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 /// \file
-/// The plain-data records of a compiled `Tape` that device code reads too (no Eigen, no STL
-/// containers: this header compiles under nvcc).
+/// The plain-data records of a compiled `Program` and its `Pose` that device code reads too (no
+/// Eigen, no STL containers: this header compiles under nvcc).
 #pragma once
 
 #include <cstddef>
@@ -31,8 +31,9 @@ struct TapeSparseNode {
 };
 
 /// The sparse evaluator's records as flat arrays (what a device copy needs: the CUDA backend
-/// uploads them and re-targets the pointers). From `Tape::sparse_layout` the pointers are into
-/// the tape, valid until it changes.
+/// uploads them and re-targets the pointers). From `sparse_layout(program, pose)` (pose.h) the
+/// pointers are into the program (structure, grid operators) and the pose (frames, posed leaf
+/// records, controllers), valid while both live unchanged.
 struct TapeSparseLayout {
   std::size_t leaves{0};
   std::size_t frame_stride{0};       ///< leaves padded to a multiple of 4
@@ -71,7 +72,7 @@ ISOKIT_HOSTDEV inline int highest_bit(std::uint64_t m) {
 #endif
 }
 
-/// `Tape::compose_sparse` over a layout: `leaves` has two bits or more.
+/// `SparseEvaluator::compose` over a layout: `leaves` has two bits or more.
 ISOKIT_HOSTDEV inline FieldSample compose(const TapeSparseLayout& t, std::uint64_t leaves,
                                           const FieldSample* s) {
   const int a = lowest_bit(leaves), b = highest_bit(leaves);
@@ -85,10 +86,10 @@ ISOKIT_HOSTDEV inline FieldSample compose(const TapeSparseLayout& t, std::uint64
 
 }  // namespace tape_detail
 
-/// The sparse evaluation of a tape of grid leaves from its layout, one point: the point in every
-/// leaf's frame (the operations and order of the tape's vectorised frame test), the leaves whose
+/// The sparse evaluation of a program of grid leaves from its layout, one point: the point in
+/// every leaf's frame (the operations and order of the vectorised frame test), the leaves whose
 /// local box contains it (trilinear grid), the composition of the non-zero ones. The same bits
-/// as `Tape::eval` on the host (tested); the CUDA kernel runs it per thread.
+/// as `SparseEvaluator::eval` on the host (tested); the CUDA kernel runs it per thread.
 ISOKIT_HOSTDEV inline FieldSample eval_sparse_layout(const TapeSparseLayout& t, const Vec3f& p) {
   FieldSample s[63];
   std::uint64_t nonzero = 0;

@@ -98,9 +98,9 @@ class Skinner {
   SkinSetup setup_;
   Progress progress_;
   std::unique_ptr<FittedRig> fitted_;
-  std::unique_ptr<SkinField> field2013_, field2014_, metrics_field_;
+  std::unique_ptr<SkinField> field2013_, field2014_;
   std::unique_ptr<FrameMetricsEvaluator> evaluator_;
-  std::vector<float> iso2014_;
+  std::vector<float> iso2014_;  ///< the metrics' iso-values (2014 tree at rest), sampled on first use
   std::vector<std::uint8_t> rest_inverted_;  ///< triangles already inverted w.r.t. the field at rest
 };
 

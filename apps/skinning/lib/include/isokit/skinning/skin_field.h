@@ -1,14 +1,16 @@
 // SPDX-License-Identifier: MIT
 /// \file
 /// The composed field of a fitted rig (2013 §4.2 and 2014 §4 trees) posed by skinning matrices:
-/// the compiled composition tree and what changes per frame.
+/// the compiled program of the composition tree (built once) and its poses (one per frame, or
+/// one per purpose: the tracker's and the metrics' poses of the same program).
 #pragma once
 
 #include <memory>
 #include <string>
 #include <vector>
 
-#include "isokit/implicit/tape.h"
+#include "isokit/implicit/pose.h"
+#include "isokit/implicit/program.h"
 #include "isokit/operators/controller.h"
 #include "isokit/skinning/fitted_rig.h"
 #include "isokit/skinning/setup.h"
@@ -21,32 +23,47 @@ class SkinField {
  public:
   /// Builds the tree: joints without a primitive are skipped (their children attach to the
   /// nearest ancestor with one; several roots hang under the first). Grid operators (contact,
-  /// bulge) are generated once per process and resolution (2014 §4.2).
+  /// bulge) are generated once per process and resolution (2014 §4.2). The current pose is the
+  /// fitted (rest) one.
   SkinField(const FittedRig& fitted, const SkinSetup& setup, TreeKind tree, const Progress& progress = {});
 
-  /// Moves every primitive by the rigid part of its joint's skinning matrix, and (bulge gate,
-  /// SkinSetup::bulge_gate) caps each bulge pair's controller by its joint's bend.
+  /// The pose of skinning matrices `skin` (one per joint): every primitive moved by the rigid
+  /// part of its joint's skinning matrix, and (bulge gate, SkinSetup::bulge_gate) each bulge
+  /// node's controller capped by its joint's bend. \throw InputError for a wrong matrix count.
+  std::shared_ptr<const implicit::Pose> pose_of(const std::vector<Affine>& skin) const;
+  /// Makes `pose_of(skin)` the current pose (functions made before keep theirs).
   void set_pose(const std::vector<Affine>& skin);
-  /// Value + gradient for the tracker. With `contacts`, `contact[k]` is set where a contact node
-  /// is active (per-node diagnostics: about 2x slower); without, the contact buffer is left alone.
-  track::FieldFunction function(bool contacts = false) const;
-  const implicit::Tape& tape() const { return *tape_; }
+
+  /// Value + gradient for the tracker, at the current pose or at `pose` (one of this field's
+  /// program). With `contacts`, `contact[k]` is set where a contact node is active (per-node
+  /// diagnostics: about 2x slower); without, the contact buffer is left alone. Thread-safe:
+  /// every call makes its own evaluator.
+  track::FieldFunction function(bool contacts = false) const { return function(pose_, contacts); }
+  track::FieldFunction function(std::shared_ptr<const implicit::Pose> pose, bool contacts = false) const;
+
+  const implicit::Program& program() const { return *program_; }
+  const implicit::Pose& pose() const { return *pose_; }
   TreeKind kind() const { return kind_; }
-  /// Per-instruction operator names (for reports).
+  /// Per-joint operator names ("joint: operator", for reports).
   std::vector<std::string> joint_operators() const { return joint_ops_; }
 
  private:
-  const FittedRig* fitted_;
-  TreeKind kind_;
-  std::shared_ptr<implicit::Tape> tape_;
-  std::vector<int> joint_of_leaf_id_;
-  std::vector<std::string> joint_ops_;
   /// A bulge node gated by the bend between its two primitives' joints.
   struct BulgeGate {
     std::size_t instruction;
     int parent_joint, child_joint;  // skinning-matrix indices
     operators::ControllerTable base;
   };
+  struct Skeleton;
+  Skeleton compressed_skeleton(const SkinSetup& setup, const Progress& progress);
+  void find_bulge_gates();
+
+  const FittedRig* fitted_;
+  TreeKind kind_;
+  std::shared_ptr<const implicit::Program> program_;
+  std::shared_ptr<const implicit::Pose> rest_, pose_;
+  std::vector<int> joint_of_leaf_id_;  ///< leaf id (compressed bone) -> rig joint
+  std::vector<std::string> joint_ops_;
   std::vector<BulgeGate> gates_;
   operators::Controller bulge_controller_;  ///< the gate's d_b (SkinSetup::bulge_controller)
 };

@@ -1,0 +1,93 @@
+// SPDX-License-Identifier: MIT
+/// \file
+/// Evaluators of a program at a pose (program.h, pose.h): each is made from `(program, pose)`,
+/// keeps references to both (they must outlive it) and owns its scratch, so an evaluator is
+/// used by one thread at a time — make one per thread or per call (they are cheap to make).
+/// All of them give the same bits for the same point.
+///
+/// - `ScalarEvaluator`: the instruction loop, any program. Pruning: at the first instruction of
+///   a subtree, if the point lies outside its world box (`Pose::boxes`), the evaluator pushes 0
+///   and jumps past the largest subtree starting there whose box excludes the point (its
+///   ancestors along first-child links, `TapeInstr::chain_parent`). Pruned subtrees are exactly
+///   0 with a 0 gradient, so pruning changes no result. Optional per-node diagnostics.
+/// - `SparseEvaluator`: programs of 2 to 63 leaves (`Program::sparse`). The point is taken into
+///   every leaf's frame at once (SSE2 where available) and tested against the leaf's local box
+///   (tighter than its world box); only the leaves containing it are evaluated, and only the
+///   nodes whose two operands are both non-zero are composed: the lowest common ancestor of the
+///   leftmost and rightmost non-zero leaves, recursively in its two subtrees. Every node in
+///   between would pass its non-zero operand through unchanged (`compose_node`'s pass-through
+///   rule), so the result is the recursive evaluation's bit for bit. Grid operators are read
+///   from a copy padded with their ghost nodes (`GridOperatorView::padded`), with the same
+///   results.
+/// - `BatchEvaluator`: many points, serially; sparse programs in blocks of points (the leaves
+///   of every point of a block first, then the compositions back to back), others through the
+///   instruction loop. For a parallel loop, one batch evaluator per task.
+///
+/// \note Field convention: values in [0, 1], inside > 0.5, gradients inward, compact support.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "isokit/implicit/pose.h"
+#include "isokit/implicit/program.h"
+
+namespace isokit::implicit {
+
+class ScalarEvaluator {
+ public:
+  /// \throw InputError if `pose` was not made for `program`.
+  ScalarEvaluator(const Program& program, const Pose& pose);
+
+  /// Value and gradient at `p`. With `diag` (`program.size()` entries, indexed by instruction;
+  /// leaves get their value only) and optional pruning (off: every instruction is evaluated;
+  /// the same result).
+  FieldSample eval(const Vec3f& p, NodeDiagnostics* diag = nullptr, bool prune = true);
+
+ private:
+  static constexpr int kLocalStack = 64;  ///< values on the C stack; deeper programs use `heap_`
+
+  const Program& program_;
+  const Pose& pose_;
+  std::vector<FieldSample> heap_;
+};
+
+class SparseEvaluator {
+ public:
+  /// \throw InputError if the program is not sparse or `pose` was not made for it.
+  SparseEvaluator(const Program& program, const Pose& pose);
+
+  FieldSample eval(const Vec3f& p) const;
+  /// The leaves that are non-zero at `p` (bit k: leaf k), their samples written to `samples[k]`
+  /// (`Program::kSparseMaxLeaves` entries; the others are left alone).
+  std::uint64_t eval_leaves(const Vec3f& p, FieldSample* samples) const;
+  /// The root's value from the non-zero leaves `leaves` (two bits or more) and their samples.
+  FieldSample compose(std::uint64_t leaves, const FieldSample* samples) const;
+
+ private:
+  const Program& program_;
+  const Pose& pose_;
+};
+
+class BatchEvaluator {
+ public:
+  /// \throw InputError if `pose` was not made for `program`.
+  BatchEvaluator(const Program& program, const Pose& pose);
+
+  /// `out[i]` = the field at `points[i]`, `i < n`.
+  void eval(const Vec3f* points, std::size_t n, FieldSample* out);
+  /// The same, written as `values[i]` and `gradients[i]`.
+  void eval(const Vec3f* points, std::size_t n, float* values, Vec3f* gradients);
+
+ private:
+  static constexpr std::size_t kBlock = 32;  ///< points per block (sparse programs)
+  void eval_block(const Vec3f* points, std::size_t count, FieldSample* out);
+
+  const Program& program_;
+  const Pose& pose_;
+  ScalarEvaluator scalar_;
+  std::vector<FieldSample> samples_;  ///< kBlock rows of (leaves + 1) samples
+  std::vector<FieldSample> block_;    ///< kBlock results (split outputs)
+};
+
+}  // namespace isokit::implicit

@@ -1,0 +1,76 @@
+// SPDX-License-Identifier: MIT
+/// \file
+/// What changes per frame in a compiled program (program.h): the leaves' transforms and the
+/// inner nodes' controller tables, with what follows from them — every instruction's world
+/// support box (for pruning) and the leaves' frames and local boxes in rows (for the sparse
+/// evaluator's SIMD test). Nothing is recompiled when a pose changes.
+///
+/// A pose is a value of one program: made from it (`Pose(program)`: the tree's own transforms
+/// and controllers), changed through setters that take the same program, then read by any
+/// number of evaluators at once. Do not change a pose while evaluators read it: make another
+/// (copies are cheap: no fields, only records), e.g. one per frame, or one per purpose (the
+/// skinning's tracker and metrics each have theirs).
+///
+/// \note Field convention: values in [0, 1], inside > 0.5, gradients inward, compact support.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "isokit/implicit/program.h"
+
+namespace isokit::implicit {
+
+class Pose {
+ public:
+  /// The pose of `program` with the tree's transforms and controllers.
+  explicit Pose(const Program& program);
+
+  /// Moves one leaf (by its position among the leaves, post-order) or every leaf tagged `id`;
+  /// the boxes and frames follow.
+  /// \throw InputError for an out-of-range leaf, an id that tags no leaf, a non-rigid transform,
+  /// or a program other than this pose's (by its sizes).
+  void set_leaf_transform(const Program& program, std::size_t leaf, const Rigid3f& local_to_world);
+  void set_transform_of(const Program& program, int id, const Rigid3f& local_to_world);
+
+  /// Replaces the controller table of inner instruction `instruction` (e.g. a controller gated
+  /// by the joint's bend); a device copy made from this pose before is not updated.
+  /// \throw InputError for a leaf or out-of-range instruction, or a value outside [0, 1].
+  void set_controller(const Program& program, std::size_t instruction,
+                      const operators::ControllerTable& table);
+  /// The controller table of inner instruction `instruction`. \throw InputError as set_controller.
+  const operators::ControllerTable& controller(const Program& program, std::size_t instruction) const;
+
+  /// True when this pose was made for `program` (same leaf and instruction counts).
+  bool fits(const Program& program) const {
+    return leaves_.size() == program.leaves().size() && boxes_.size() == program.size();
+  }
+  /// The program's leaf records with this pose's transforms.
+  const std::vector<TapeLeaf>& leaves() const { return leaves_; }
+  /// Controller tables, indexed by `TapeInstr::op`.
+  const std::vector<operators::ControllerTable>& controllers() const { return controllers_; }
+  /// World support box of every instruction (a node's box is the union of its children's).
+  const std::vector<Box3f>& boxes() const { return boxes_; }
+  /// The root's world box: the field is 0 outside.
+  Box3f support() const { return boxes_.back(); }
+  /// Sparse programs: per leaf, in rows of `frame_stride` floats, R (9 rows, row-major), t (3)
+  /// and the local test box lo (3), hi (3); padding leaves have an empty box.
+  const std::vector<float>& frames() const { return frames_; }
+
+ private:
+  void require_fits(const Program& program) const;
+  void update(const Program& program);
+  void update_frames(const Program& program);
+
+  std::vector<TapeLeaf> leaves_;
+  std::vector<operators::ControllerTable> controllers_;
+  std::vector<Box3f> boxes_;
+  std::vector<float> frames_;
+};
+
+/// The sparse evaluator's records of a program at a pose, as flat arrays (what a device copy
+/// uploads); the pointers are into `program` and `pose`, valid while both live unchanged.
+/// \throw InputError when the program is not sparse or the pose is not the program's.
+TapeSparseLayout sparse_layout(const Program& program, const Pose& pose);
+
+}  // namespace isokit::implicit

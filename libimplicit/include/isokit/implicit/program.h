@@ -1,0 +1,104 @@
+// SPDX-License-Identifier: MIT
+/// \file
+/// A composition tree compiled into an immutable program (libfive's tree / deck split): a flat
+/// tape of instructions in post-order, read by a small value-stack machine, with the leaves,
+/// the operators and the node tags as plain-data records (the layout GPU kernels read, see
+/// tape_records.h). What changes per frame — leaf transforms, controller tables, and the world
+/// boxes that follow from them — is a separate `Pose` (pose.h); the evaluators (evaluators.h)
+/// read a program and a pose.
+///
+/// A program is a value: immutable once built, copyable (copies share the fields and the padded
+/// grid operators), and safe to share between threads.
+///
+/// \note Field convention: values in [0, 1], inside > 0.5, gradients inward, compact support.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "isokit/implicit/field.h"
+#include "isokit/implicit/node_eval.h"
+#include "isokit/implicit/tape_records.h"
+#include "isokit/implicit/tree.h"
+
+namespace isokit::implicit {
+
+/// One instruction (post-order): a leaf, or an inner node combining the two values on top of
+/// the stack.
+struct TapeInstr {
+  std::int32_t leaf{-1};          ///< index into the leaf records, or -1 for an inner node
+  OpKind kind{OpKind::Max};       ///< inner nodes
+  std::int32_t op{-1};            ///< index into the controller / grid-operator arrays
+  std::int32_t chain_parent{-1};  ///< parent, if this instruction is its first child; else -1
+};
+
+class Program {
+ public:
+  /// Most leaves of a sparse program (one bit per leaf in a 64-bit mask, one spare).
+  static constexpr std::size_t kSparseMaxLeaves = 63;
+
+  /// Compiles `tree`. \throw InputError if the tree is deeper than 4096.
+  explicit Program(const CompositionTree& tree);
+
+  std::size_t size() const { return instr_.size(); }
+  const std::vector<TapeInstr>& instructions() const { return instr_; }
+  /// Leaf records in post-order, with the tree's transforms (a `Pose` holds the current ones).
+  const std::vector<TapeLeaf>& leaves() const { return leaves_; }
+  /// The field at `index` (what `TapeLeaf::field` indexes).
+  const Field& field(std::size_t index) const { return *fields_[index]; }
+  /// The support box of leaf `leaf`'s field, in the leaf's frame.
+  const Box3f& leaf_support(std::size_t leaf) const { return supports_[leaf]; }
+  /// The box the sparse evaluator tests a leaf's local point against: the grid's box for a grid
+  /// leaf (the one `eval_grid` tests), else the field's support.
+  Box3f leaf_test_box(std::size_t leaf) const;
+  /// Most values on the stack during an evaluation.
+  int max_stack() const { return max_stack_; }
+
+  /// The tag of instruction `instruction` (the default tag for leaves; tree.h).
+  const NodeTag& tag(std::size_t instruction) const { return tags_[instruction]; }
+  /// The index of inner instruction `instruction` into the operator arrays.
+  /// \throw InputError for a leaf or an out-of-range instruction.
+  std::size_t operator_of(std::size_t instruction) const;
+  /// The tree's controller table of inner instruction `instruction` (a pose may replace it).
+  /// \throw InputError as operator_of.
+  const operators::ControllerTable& controller(std::size_t instruction) const {
+    return controllers_[operator_of(instruction)];
+  }
+  /// The tree's controller tables and the grid operators (empty views for other kinds), indexed
+  /// by `TapeInstr::op`.
+  const std::vector<operators::ControllerTable>& controllers() const { return controllers_; }
+  const std::vector<operators::GridOperatorView>& grids() const { return grids_; }
+
+  /// True when the sparse evaluator runs it (2 to kSparseMaxLeaves leaves; evaluators.h).
+  bool sparse() const { return sparse_; }
+  /// Sparse programs: the leaf count padded to a multiple of 4 (the SIMD frame test's rows).
+  std::size_t frame_stride() const { return frame_stride_; }
+  /// Sparse programs: `lca()[a * leaves + b]`, a < b: the smallest node (index into
+  /// `sparse_nodes()`) above leaves a and b.
+  const std::vector<std::uint8_t>& lca() const { return lca_; }
+  const std::vector<TapeSparseNode>& sparse_nodes() const { return sparse_nodes_; }
+
+ private:
+  void compile(const CompositionTree& tree);
+  void add_leaf(const FieldPtr& field, const Rigid3f& xf, int id);
+  std::int32_t add_operator(const NodeOperator& op);
+  void build_sparse();
+
+  std::vector<TapeInstr> instr_;
+  std::vector<NodeTag> tags_;
+  std::vector<TapeLeaf> leaves_;
+  std::vector<Box3f> supports_;
+  std::vector<FieldPtr> fields_;
+  std::vector<operators::ControllerTable> controllers_;
+  std::vector<operators::GridOperatorView> grids_;
+  std::vector<std::shared_ptr<const operators::GridOperator>> grid_owners_;
+  std::vector<std::shared_ptr<const std::vector<float>>> padded_grids_;  ///< GridOperatorView::padded
+  int max_stack_{0};
+  bool sparse_{false};
+  std::size_t frame_stride_{0};
+  std::vector<std::uint8_t> lca_;
+  std::vector<TapeSparseNode> sparse_nodes_;
+};
+
+}  // namespace isokit::implicit

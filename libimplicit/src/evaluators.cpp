@@ -1,0 +1,239 @@
+// SPDX-License-Identifier: MIT
+// The evaluators of a program at a pose: the instruction loop (scalar), the sparse evaluation
+// (SIMD frame test of every leaf, then the compositions of non-zero operands only), and batches.
+#include "isokit/implicit/evaluators.h"
+
+#include <algorithm>
+#include <new>
+#include <string>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
+#include "isokit/core/error.h"
+
+namespace isokit::implicit {
+
+namespace {
+
+using tape_detail::highest_bit;
+using tape_detail::lowest_bit;
+
+void require_fits(const Program& program, const Pose& pose) {
+  if (pose.fits(program)) return;
+  require(false, "pose", "was made for another program",
+          "make the pose from the program it is evaluated with: Pose(program)");
+}
+
+/// Bit k set when leaf k's local box contains its local point `q_k = R_k^T (p - t_k)`, written to
+/// q (3 rows of `m` floats). `frames`: see Pose::frames. The same operations, in the same order,
+/// as `Rigid3f::apply_inverse` and `Box3f::contains` (the same bits).
+std::uint64_t local_points(const float* frames, std::size_t m, const Vec3f& p, float* q) {
+  std::uint64_t mask = 0;
+  const float* R = frames;
+  const float* t = frames + 9 * m;
+  const float* lo = frames + 12 * m;
+  const float* hi = frames + 15 * m;
+#if defined(__SSE2__)
+  const __m128 px = _mm_set1_ps(p.x), py = _mm_set1_ps(p.y), pz = _mm_set1_ps(p.z);
+  for (std::size_t k = 0; k < m; k += 4) {
+    const __m128 dx = _mm_sub_ps(px, _mm_loadu_ps(t + k)), dy = _mm_sub_ps(py, _mm_loadu_ps(t + m + k)),
+                 dz = _mm_sub_ps(pz, _mm_loadu_ps(t + 2 * m + k));
+    __m128 in = _mm_set1_ps(0.f);
+    for (std::size_t c = 0; c < 3; ++c) {
+      // q_c = (R[c] dx + R[3 + c] dy) + R[6 + c] dz
+      const __m128 qc = _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_loadu_ps(R + c * m + k), dx),
+                                              _mm_mul_ps(_mm_loadu_ps(R + (3 + c) * m + k), dy)),
+                                   _mm_mul_ps(_mm_loadu_ps(R + (6 + c) * m + k), dz));
+      _mm_store_ps(q + c * m + k, qc);
+      const __m128 ok = _mm_and_ps(_mm_cmpge_ps(qc, _mm_loadu_ps(lo + c * m + k)),
+                                   _mm_cmple_ps(qc, _mm_loadu_ps(hi + c * m + k)));
+      in = c == 0 ? ok : _mm_and_ps(in, ok);
+    }
+    mask |= std::uint64_t(_mm_movemask_ps(in)) << k;
+  }
+#else
+  for (std::size_t k = 0; k < m; ++k) {
+    const float dx = p.x - t[k], dy = p.y - t[m + k], dz = p.z - t[2 * m + k];
+    bool in = true;
+    for (std::size_t c = 0; c < 3; ++c) {
+      const float qc = R[c * m + k] * dx + R[(3 + c) * m + k] * dy + R[(6 + c) * m + k] * dz;
+      q[c * m + k] = qc;
+      in = in & (qc >= lo[c * m + k]) & (qc <= hi[c * m + k]);
+    }
+    mask |= std::uint64_t(in) << k;
+  }
+#endif
+  return mask;
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// ScalarEvaluator
+
+ScalarEvaluator::ScalarEvaluator(const Program& program, const Pose& pose) : program_(program), pose_(pose) {
+  require_fits(program, pose);
+  if (program.max_stack() > kLocalStack) heap_.resize(std::size_t(program.max_stack()));
+}
+
+FieldSample ScalarEvaluator::eval(const Vec3f& p, NodeDiagnostics* diag, bool prune) {
+  // Value stack: left uninitialised (every slot is written before it is read).
+  alignas(FieldSample) unsigned char raw[kLocalStack * sizeof(FieldSample)];
+  FieldSample* st = heap_.empty() ? reinterpret_cast<FieldSample*>(raw) : heap_.data();
+  const std::vector<TapeInstr>& instr = program_.instructions();
+  const std::vector<Box3f>& box = pose_.boxes();
+  const std::vector<TapeLeaf>& leaves = pose_.leaves();
+  const std::vector<operators::ControllerTable>& controllers = pose_.controllers();
+  const std::vector<operators::GridOperatorView>& grids = program_.grids();
+  int sp = 0;
+  const std::size_t n = instr.size();
+  std::size_t i = 0;
+  while (i < n) {
+    const TapeInstr& in = instr[i];
+    // Only a subtree's first instruction (always a leaf) is tested: an inner node whose box
+    // excludes p was already skipped with the chain that starts at its first leaf.
+    if (prune && in.leaf >= 0 && !box[i].contains(p)) {
+      std::size_t j = i;
+      while (instr[j].chain_parent >= 0 && !box[std::size_t(instr[j].chain_parent)].contains(p))
+        j = std::size_t(instr[j].chain_parent);
+      if (diag)
+        for (std::size_t k = i; k <= j; ++k) diag[k] = NodeDiagnostics{};
+      new (&st[sp++]) FieldSample{};
+      i = j + 1;
+      continue;
+    }
+    if (in.leaf >= 0) {
+      const TapeLeaf& l = leaves[std::size_t(in.leaf)];
+      const Vec3f q = l.local_to_world.apply_inverse(p);
+      FieldSample s = l.grid.nodes ? eval_grid(l.grid, q) : program_.field(std::size_t(l.field)).eval(q);
+      s.gradient = l.local_to_world.rotate(s.gradient);
+      new (&st[sp++]) FieldSample(s);
+      if (diag) diag[i] = NodeDiagnostics{0.f, 0.f, s.value, 1, 0, 0};
+    } else {
+      const FieldSample& b = st[sp - 1];
+      FieldSample& a = st[sp - 2];
+      --sp;
+      if (diag || (a.value != 0.f && b.value != 0.f)) {
+        const std::size_t o = std::size_t(in.op);
+        a = compose_node(in.kind, controllers[o], grids[o], a, b, diag ? diag + i : nullptr);
+      } else if (a.value == 0.f) {
+        // compose_node's pass-through rule, inlined (the common case); two zeros give 0.
+        a = b.value == 0.f ? FieldSample{} : b;
+      }
+    }
+    ++i;
+  }
+  return st[0];
+}
+
+// ---------------------------------------------------------------------------------------------
+// SparseEvaluator
+
+SparseEvaluator::SparseEvaluator(const Program& program, const Pose& pose) : program_(program), pose_(pose) {
+  // Made once per point by ProgramField::eval: no message is built unless it fails.
+  if (!program.sparse())
+    require(false, "program", "is not evaluated sparsely (2 to 63 leaves and a root node are needed)",
+            "use a ScalarEvaluator or a BatchEvaluator");
+  require_fits(program, pose);
+}
+
+FieldSample SparseEvaluator::eval(const Vec3f& p) const {
+  alignas(FieldSample) unsigned char raw[Program::kSparseMaxLeaves * sizeof(FieldSample)];
+  FieldSample* samples = reinterpret_cast<FieldSample*>(raw);  // only non-zero leaves are read
+  const std::uint64_t leaves = eval_leaves(p, samples);
+  if (!leaves) return {};
+  if (!(leaves & (leaves - 1))) return samples[lowest_bit(leaves)];  // passed through to the root
+  return compose(leaves, samples);
+}
+
+std::uint64_t SparseEvaluator::eval_leaves(const Vec3f& p, FieldSample* samples) const {
+  // The point in every leaf's frame, and which leaves' local boxes contain it; only those are
+  // evaluated, and only the ones with a non-zero value are kept (a leaf with value 0 is passed
+  // over by every node above it, whatever its gradient, as by compose_node).
+  const std::size_t m = program_.frame_stride();
+  alignas(16) float q[3 * ((Program::kSparseMaxLeaves + 3) / 4 * 4)];  // 3 rows of frame_stride
+  std::uint64_t pending = local_points(pose_.frames().data(), m, p, q), nonzero = 0;
+  const std::vector<TapeLeaf>& leaves = pose_.leaves();
+  while (pending) {
+    const int k = lowest_bit(pending);
+    pending &= pending - 1;
+    const TapeLeaf& l = leaves[std::size_t(k)];
+    const Vec3f local{q[std::size_t(k)], q[m + std::size_t(k)], q[2 * m + std::size_t(k)]};
+    FieldSample s =
+        l.grid.nodes ? eval_grid_inside(l.grid, local) : program_.field(std::size_t(l.field)).eval(local);
+    s.gradient = l.local_to_world.rotate(s.gradient);
+    samples[k] = s;  // read only when non-zero (no branch: the outcome is data dependent)
+    nonzero |= std::uint64_t(s.value != 0.f) << k;
+  }
+  return nonzero;
+}
+
+FieldSample SparseEvaluator::compose(std::uint64_t leaves, const FieldSample* samples) const {
+  // `leaves` has two bits or more. The smallest subtree holding them all is rooted at the lowest
+  // common ancestor of the leftmost and the rightmost one: its first child holds the leftmost
+  // leaf, its second child the rightmost, so both operands are compositions of non-zero leaves.
+  // Every node between passes its one non-zero operand through unchanged (compose_node's rule).
+  const int a = lowest_bit(leaves), b = highest_bit(leaves);
+  const std::size_t count = pose_.leaves().size();
+  const TapeSparseNode& node =
+      program_.sparse_nodes()[program_.lca()[std::size_t(a) * count + std::size_t(b)]];
+  const std::uint64_t first = leaves & ((std::uint64_t(1) << node.mid) - 1), second = leaves & ~first;
+  const FieldSample fa = (first & (first - 1)) ? compose(first, samples) : samples[a];
+  const FieldSample fb = (second & (second - 1)) ? compose(second, samples) : samples[b];
+  const std::size_t o = std::size_t(node.op);
+  return compose_node(node.kind, pose_.controllers()[o], program_.grids()[o], fa, fb, nullptr);
+}
+
+// ---------------------------------------------------------------------------------------------
+// BatchEvaluator
+
+BatchEvaluator::BatchEvaluator(const Program& program, const Pose& pose)
+    : program_(program), pose_(pose), scalar_(program, pose) {
+  if (program.sparse()) samples_.resize(kBlock * (program.leaves().size() + 1));
+}
+
+void BatchEvaluator::eval(const Vec3f* points, std::size_t n, FieldSample* out) {
+  if (!program_.sparse()) {
+    for (std::size_t i = 0; i < n; ++i) out[i] = scalar_.eval(points[i], nullptr, true);
+    return;
+  }
+  for (std::size_t b0 = 0; b0 < n; b0 += kBlock) eval_block(points + b0, std::min(kBlock, n - b0), out + b0);
+}
+
+void BatchEvaluator::eval(const Vec3f* points, std::size_t n, float* values, Vec3f* gradients) {
+  block_.resize(kBlock);
+  for (std::size_t b0 = 0; b0 < n; b0 += kBlock) {
+    const std::size_t count = std::min(kBlock, n - b0);
+    eval(points + b0, count, block_.data());
+    for (std::size_t j = 0; j < count; ++j) {
+      values[b0 + j] = block_[j].value;
+      gradients[b0 + j] = block_[j].gradient;
+    }
+  }
+}
+
+void BatchEvaluator::eval_block(const Vec3f* points, std::size_t count, FieldSample* out) {
+  // Three passes: the leaves of every point; the result of every point with at most one
+  // non-zero leaf (read without a branch: slot L of a row stays 0); then the compositions of
+  // the other points, back to back.
+  const SparseEvaluator sparse(program_, pose_);
+  const std::size_t L = program_.leaves().size(), row = L + 1;
+  std::uint64_t masks[kBlock];
+  std::uint32_t pending[kBlock];
+  for (std::size_t j = 0; j < count; ++j) masks[j] = sparse.eval_leaves(points[j], samples_.data() + j * row);
+  std::size_t np = 0;
+  for (std::size_t j = 0; j < count; ++j) {
+    const std::uint64_t leaves = masks[j];
+    out[j] = samples_[j * row + std::size_t(lowest_bit(leaves | (std::uint64_t(1) << L)))];
+    pending[np] = std::uint32_t(j);
+    np += (leaves & (leaves - 1)) != 0;
+  }
+  for (std::size_t i = 0; i < np; ++i) {
+    const std::size_t j = pending[i];
+    out[j] = sparse.compose(masks[j], samples_.data() + j * row);
+  }
+}
+
+}  // namespace isokit::implicit

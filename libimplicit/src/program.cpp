@@ -1,0 +1,142 @@
+// SPDX-License-Identifier: MIT
+// Compiling a composition tree into a program: the post-order instructions, leaf and operator
+// records, node tags, and the sparse evaluator's structure (leaf ranges and lowest common
+// ancestors). Nothing here depends on a pose.
+#include "isokit/implicit/program.h"
+
+#include <algorithm>
+#include <string>
+#include <utility>
+
+#include "isokit/core/error.h"
+#include "isokit/implicit/grid_field.h"
+#include "tree_node.h"
+
+namespace isokit::implicit {
+
+Program::Program(const CompositionTree& tree) {
+  compile(tree);
+  build_sparse();
+}
+
+void Program::compile(const CompositionTree& tree) {
+  using NodeP = const CompositionTree::Node*;
+  // Iterative post-order with stack-depth tracking (no recursion limit on deep chains).
+  std::vector<std::pair<NodeP, int>> stack{{tree.n_.get(), 0}};
+  std::vector<std::int32_t> child_results;
+  int depth = 0;
+  while (!stack.empty()) {
+    auto& [n, state] = stack.back();
+    if (n->field) {
+      child_results.push_back(std::int32_t(instr_.size()));
+      add_leaf(n->field, n->xf, n->id);
+      ++depth;
+      max_stack_ = std::max(max_stack_, depth);
+      stack.pop_back();
+    } else if (state == 0) {
+      state = 1;
+      stack.push_back({n->first.get(), 0});
+    } else if (state == 1) {
+      state = 2;
+      stack.push_back({n->second.get(), 0});
+    } else {
+      child_results.pop_back();  // the second child
+      const std::int32_t a = child_results.back();
+      child_results.pop_back();
+      TapeInstr in;
+      in.kind = n->op.kind;
+      in.op = add_operator(n->op);
+      const std::int32_t self = std::int32_t(instr_.size());
+      instr_[std::size_t(a)].chain_parent = self;  // the first child starts this subtree
+      child_results.push_back(self);
+      instr_.push_back(in);
+      tags_.push_back(n->tag);
+      --depth;
+      stack.pop_back();
+    }
+    require(stack.size() <= 8192, "composition tree", "is deeper than 4096", "build a balanced tree");
+  }
+}
+
+void Program::add_leaf(const FieldPtr& field, const Rigid3f& xf, int id) {
+  TapeInstr in;
+  in.leaf = std::int32_t(leaves_.size());
+  fields_.push_back(field);
+  TapeLeaf leaf{xf, std::int32_t(fields_.size() - 1), id, {}};
+  if (const auto* g = dynamic_cast<const GridField*>(field.get())) leaf.grid = g->view();
+  leaves_.push_back(leaf);
+  supports_.push_back(field->support());
+  instr_.push_back(in);
+  tags_.push_back(NodeTag{});
+}
+
+std::int32_t Program::add_operator(const NodeOperator& op) {
+  const std::int32_t index = std::int32_t(controllers_.size());
+  controllers_.push_back(op.controller);
+  operators::GridOperatorView gv{};
+  if (op.grid) {
+    // One padded copy per grid operator (edge-free stencils; same results), shared by the nodes
+    // that use it and by copies of the program.
+    std::size_t same = 0;
+    while (same < grid_owners_.size() && grid_owners_[same] != op.grid) ++same;
+    if (same < grid_owners_.size()) {
+      gv = grids_[same];
+    } else {
+      gv = op.grid->view();
+      auto padded = std::make_shared<std::vector<float>>(gv.padded_size());
+      gv.fill_padded(padded->data());
+      gv.padded = padded->data();
+      padded_grids_.push_back(std::move(padded));
+    }
+  }
+  grids_.push_back(gv);
+  grid_owners_.push_back(op.grid);
+  return index;
+}
+
+void Program::build_sparse() {
+  const std::size_t L = leaves_.size();
+  sparse_ = L >= 2 && L <= kSparseMaxLeaves;
+  if (!sparse_) return;
+  // Post-order pass: the leaf range of every node, and the lowest common ancestor of every pair
+  // of leaves (the node where the first leaf is under its first child, the second under its
+  // second child).
+  struct Item {
+    std::int32_t lo, hi;
+  };
+  std::vector<Item> st;
+  lca_.assign(L * L, 0);
+  for (const TapeInstr& in : instr_) {
+    if (in.leaf >= 0) {
+      st.push_back({in.leaf, in.leaf + 1});
+      continue;
+    }
+    const Item b = st.back();
+    st.pop_back();
+    const Item a = st.back();
+    st.pop_back();
+    const std::size_t self = sparse_nodes_.size();
+    for (std::int32_t i = a.lo; i < a.hi; ++i)
+      for (std::int32_t j = b.lo; j < b.hi; ++j)
+        lca_[std::size_t(i) * L + std::size_t(j)] = std::uint8_t(self);
+    sparse_nodes_.push_back(TapeSparseNode{in.kind, in.op, b.lo});
+    st.push_back({a.lo, b.hi});
+  }
+  frame_stride_ = (L + 3) / 4 * 4;
+}
+
+Box3f Program::leaf_test_box(std::size_t leaf) const {
+  const TapeLeaf& l = leaves_[leaf];
+  // A grid leaf's box is the one eval_grid tests; any field is 0 outside its support.
+  return l.grid.nodes ? l.grid.box : supports_[leaf];
+}
+
+std::size_t Program::operator_of(std::size_t instruction) const {
+  require(instruction < instr_.size() && instr_[instruction].leaf < 0,
+          "program instruction " + std::to_string(instruction),
+          "is not an inner node (" + std::to_string(instr_.size()) + " instructions)",
+          "use the index of an instruction with leaf < 0");
+  return std::size_t(instr_[instruction].op);
+}
+
+}  // namespace isokit::implicit
