@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "isokit/implicit/field.h"
+#include "isokit/implicit/grid_math.h"
 
 namespace isokit::implicit {
 

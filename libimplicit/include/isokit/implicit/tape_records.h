@@ -9,6 +9,7 @@
 
 #include "isokit/core/math.h"
 #include "isokit/implicit/field_math.h"
+#include "isokit/implicit/grid_math.h"
 #include "isokit/implicit/node_eval.h"
 
 namespace isokit::implicit {

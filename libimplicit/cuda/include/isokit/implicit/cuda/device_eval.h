@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 /// \file
-/// CUDA evaluation of the field math in `field_math.h` (the same inline functions the CPU runs).
+/// CUDA evaluation of the field math in `field_math.h` and `grid_math.h` (the same inline
+/// functions the CPU runs).
 /// Host-side API without CUDA headers. All functions throw `std::runtime_error` with the CUDA
 /// error string on failure, including when no device is present.
 #pragma once
@@ -8,6 +9,7 @@
 #include <cstddef>
 
 #include "isokit/implicit/field_math.h"
+#include "isokit/implicit/grid_math.h"
 
 namespace isokit::implicit::cuda {
 
