@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
+#include <string>
 
 #include "isokit/core/error.h"
 
@@ -74,18 +76,60 @@ Rigid3d bone_frame(const Vec3d& a, const Vec3d& b) {
   return xf;
 }
 
-FittedPart fit_part(const MeshPart& part, const PartFitOptions& o) {
-  const std::string& name = part.name;
+namespace {
+
+/// A part's sub-mesh in its bone frame, with what the sampling needs.
+struct LocalMesh {
+  std::vector<Vec3d> v;     ///< vertices, bone frame
+  std::vector<Vec3d> vn;    ///< area-weighted vertex normals (not normalised)
+  std::vector<double> cum;  ///< cumulative triangle areas
+  double area{0};
+  double len{0};  ///< bone length
+};
+
+void validate_options(const PartFitOptions& o, const std::string& name) {
   require(o.target_samples >= 4 && o.target_samples <= 10000, name + ": target_samples",
           "must be in [4, 10000] (got " + std::to_string(o.target_samples) + ")", "use the default 50");
   require(o.candidates_per_sample >= 1, name + ": candidates_per_sample", "must be >= 1",
-          "use the default 30");
+          "use the default 10");
   require(o.cull_h >= 0 && o.cull_h < 0.5, name + ": cull_h",
           "must be in [0, 0.5) (got " + format_number(o.cull_h) + ")", "use the default 0.05");
   require(o.opening_offset >= 0 && o.opening_offset <= 2, name + ": opening_offset",
           "must be in [0, 2] (got " + format_number(o.opening_offset) + ")", "use 0.1 (the default)");
   require(o.support_margin > 0 && std::isfinite(o.support_margin), name + ": support_margin", "must be > 0",
           "use the default 1");
+}
+
+/// The sub-mesh in the bone frame `frame`, checked: finite, non-empty, a bone of non-zero
+/// length, indices in range, non-zero area.
+LocalMesh local_mesh(const MeshPart& part, const Rigid3d& frame, double len) {
+  const std::string& name = part.name;
+  LocalMesh m;
+  m.len = len;
+  m.v.resize(part.vertices.size());
+  for (std::size_t i = 0; i < m.v.size(); ++i) m.v[i] = frame.apply_inverse(part.vertices[i]);
+  const int nv = int(m.v.size());
+  m.vn.resize(m.v.size());
+  m.cum.resize(part.triangles.size());
+  for (std::size_t t = 0; t < part.triangles.size(); ++t) {
+    const auto& tri = part.triangles[t];
+    for (int k = 0; k < 3; ++k)
+      if (tri[k] < 0 || tri[k] >= nv)
+        require(false, name + ": triangle " + std::to_string(t),
+                "indexes vertex " + std::to_string(tri[k]) + " of " + std::to_string(nv), "fix the indices");
+    const Vec3d n = cross(m.v[tri[1]] - m.v[tri[0]], m.v[tri[2]] - m.v[tri[0]]);
+    for (int k = 0; k < 3; ++k) m.vn[tri[k]] += n;
+    m.area += 0.5 * norm(n);
+    m.cum[t] = m.area;
+  }
+  require(m.area > 0, name, "the sub-mesh has zero area", "give the part real triangles");
+  return m;
+}
+
+/// The bone length, after checking the bone and the vertices (finite, a sub-mesh, a bone of
+/// non-zero length).
+double checked_bone_length(const MeshPart& part) {
+  const std::string& name = part.name;
   require(finite(part.bone_start) && finite(part.bone_end), name + ": bone", "has non-finite end points",
           "fix the skeleton");
   const double len = norm(part.bone_end - part.bone_start);
@@ -99,89 +143,79 @@ FittedPart fit_part(const MeshPart& part, const PartFitOptions& o) {
   }
   require(len > 1e-9 * std::max(1.0, norm(vbox.size())), name + ": bone",
           "has zero length (" + format_number(len) + ")", "give the bone distinct end points");
+  return len;
+}
 
-  const Rigid3d frame = bone_frame(part.bone_start, part.bone_end);
-  std::vector<Vec3d> v(part.vertices.size());
-  for (std::size_t i = 0; i < v.size(); ++i) v[i] = frame.apply_inverse(part.vertices[i]);
-  const int nv = int(v.size());
-
-  std::vector<Vec3d> vn(v.size());
-  std::vector<double> cum(part.triangles.size());
-  double area = 0;
-  for (std::size_t t = 0; t < part.triangles.size(); ++t) {
-    const auto& tri = part.triangles[t];
-    for (int k = 0; k < 3; ++k)
-      if (tri[k] < 0 || tri[k] >= nv)
-        require(false, name + ": triangle " + std::to_string(t),
-                "indexes vertex " + std::to_string(tri[k]) + " of " + std::to_string(nv), "fix the indices");
-    const Vec3d n = cross(v[tri[1]] - v[tri[0]], v[tri[2]] - v[tri[0]]);
-    for (int k = 0; k < 3; ++k) vn[tri[k]] += n;
-    area += 0.5 * norm(n);
-    cum[t] = area;
-  }
-  require(area > 0, name, "the sub-mesh has zero area", "give the part real triangles");
-
-  // Candidates: area-weighted uniform points, culled by the planes of eq. 2.
+/// Candidates: `ncand` area-weighted uniform points (seeded), culled by the planes of eq. 2, with
+/// their interpolated normals.
+std::vector<HrbfSample> candidates(const MeshPart& part, const LocalMesh& m, const PartFitOptions& o,
+                                   std::size_t ncand) {
   SplitMix rng{o.seed};
-  const std::size_t ncand = std::size_t(o.target_samples) * std::size_t(o.candidates_per_sample);
   std::vector<HrbfSample> cand;
   cand.reserve(ncand);
   for (std::size_t c = 0; c < ncand; ++c) {
-    const double pick = rng.uniform() * area;
-    const std::size_t t =
-        std::min(std::size_t(std::lower_bound(cum.begin(), cum.end(), pick) - cum.begin()), cum.size() - 1);
+    const double pick = rng.uniform() * m.area;
+    const std::size_t t = std::min(
+        std::size_t(std::lower_bound(m.cum.begin(), m.cum.end(), pick) - m.cum.begin()), m.cum.size() - 1);
     const double su = std::sqrt(rng.uniform()), w = rng.uniform();
     const double b0 = 1 - su, b1 = su * (1 - w), b2 = su * w;
     const auto& tri = part.triangles[t];
-    const Vec3d p = v[tri[0]] * b0 + v[tri[1]] * b1 + v[tri[2]] * b2;
-    const double u = p.z / len;
+    const Vec3d p = m.v[tri[0]] * b0 + m.v[tri[1]] * b1 + m.v[tri[2]] * b2;
+    const double u = p.z / m.len;
     if (!(u > o.cull_h && u < 1 - o.cull_h)) continue;
-    Vec3d n = vn[tri[0]] * b0 + vn[tri[1]] * b1 + vn[tri[2]] * b2;
-    if (!(norm(n) > 0)) n = cross(v[tri[1]] - v[tri[0]], v[tri[2]] - v[tri[0]]);
+    Vec3d n = m.vn[tri[0]] * b0 + m.vn[tri[1]] * b1 + m.vn[tri[2]] * b2;
+    if (!(norm(n) > 0)) n = cross(m.v[tri[1]] - m.v[tri[0]], m.v[tri[2]] - m.v[tri[0]]);
     if (!(norm(n) > 0)) continue;
     cand.push_back({p, n / norm(n)});
   }
-  require(cand.size() >= 4, name, "fewer than 4 surface samples survive the culling planes",
-          "check that the sub-mesh surrounds its bone, or lower PartFitOptions::cull_h");
+  return cand;
+}
 
-  // Poisson-disk selection: bisect the disk radius so that greedy dart throwing keeps about
-  // target_samples candidates (the smallest count >= target found, else the largest).
-  const std::size_t target = std::size_t(o.target_samples);
+/// Poisson-disk selection: bisects the disk radius so that greedy dart throwing keeps about
+/// `target` candidates (the smallest count >= target found, else the largest). `kept_area`: the
+/// area the candidates cover.
+std::vector<std::size_t> poisson_disk(const std::vector<HrbfSample>& cand, std::size_t target,
+                                      double kept_area) {
   std::vector<std::size_t> best;
   if (cand.size() <= target) {
     for (std::size_t i = 0; i < cand.size(); ++i) best.push_back(i);
-  } else {
-    const double kept_area = area * double(cand.size()) / double(ncand);
-    const double guess = std::sqrt(2.0 * kept_area / (std::sqrt(3.0) * double(target)));
-    double lo = 0.1 * guess, hi = 2.0 * guess;
-    for (int it = 0; it < 16; ++it) {
-      const double mid = 0.5 * (lo + hi);
-      std::vector<std::size_t> kept = dart_throw(cand, mid, 2 * target);
-      const bool enough = kept.size() >= target;
-      if (enough && (best.size() < target || kept.size() < best.size())) best = kept;
-      if (!enough && best.size() < target && kept.size() > best.size()) best = kept;
-      if (kept.size() >= target && kept.size() <= target + 2) break;
-      (enough ? lo : hi) = mid;
-    }
+    return best;
   }
+  const double guess = std::sqrt(2.0 * kept_area / (std::sqrt(3.0) * double(target)));
+  double lo = 0.1 * guess, hi = 2.0 * guess;
+  for (int it = 0; it < 16; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    std::vector<std::size_t> kept = dart_throw(cand, mid, 2 * target);
+    const bool enough = kept.size() >= target;
+    if (enough && (best.size() < target || kept.size() < best.size())) best = kept;
+    if (!enough && best.size() < target && kept.size() > best.size()) best = kept;
+    if (kept.size() >= target && kept.size() <= target + 2) break;
+    (enough ? lo : hi) = mid;
+  }
+  return best;
+}
 
-  FittedPart out;
-  out.local_to_world = frame;
-  for (std::size_t i : best) out.samples.push_back(cand[i]);
-  // Orientation: outward normals point away from the bone on average. An inward-oriented mesh
-  // would give an inverted field (inside < 0.5): refuse it rather than fit it.
+/// Orientation: outward normals point away from the bone on average. An inward-oriented mesh
+/// would give an inverted field (inside < 0.5): refuse it rather than fit it.
+void require_outward(const std::vector<HrbfSample>& samples, double len, const std::string& name) {
   double outward = 0;
-  for (const HrbfSample& s : out.samples) {
+  for (const HrbfSample& s : samples) {
     const Vec3d radial = s.position - Vec3d{0, 0, std::clamp(s.position.z, 0.0, len)};
     const double rl = norm(radial);
     if (rl > 0) outward += dot(s.normal, radial) / rl;
   }
   require(outward > 0, name, "the triangles are oriented inward (normals point towards the bone)",
           "flip the triangle winding of this part");
-  // Closure points (2013 §4.1, Fig. 3): on the axis, s beyond each joint, normal outward.
+}
+
+/// Closure points (2013 §4.1, Fig. 3), appended to `out.samples`: on the axis, `s` beyond each
+/// closed bone end, and `opening_offset × s` beyond each opening; normals outward.
+void add_closure_points(const MeshPart& part, const LocalMesh& m, const PartFitOptions& o, FittedPart& out) {
+  const std::string& name = part.name;
+  const double len = m.len;
   auto nearest = [&](const Vec3d& joint) {
     double s = std::numeric_limits<double>::infinity();
-    for (const Vec3d& p : v) s = std::min(s, norm(p - joint));
+    for (const Vec3d& p : m.v) s = std::min(s, norm(p - joint));
     return s;
   };
   if (o.close_start) {
@@ -198,6 +232,7 @@ FittedPart fit_part(const MeshPart& part, const PartFitOptions& o) {
     out.samples.push_back({{0, 0, len + s}, {0, 0, 1}});
     ++out.closure_points;
   }
+  const Rigid3d& frame = out.local_to_world;
   for (std::size_t k = 0; k < part.openings.size(); ++k) {
     const Vec3d j = frame.apply_inverse(part.openings[k].joint);
     const Vec3d d = frame.rotate_inverse(part.openings[k].direction);
@@ -210,14 +245,19 @@ FittedPart fit_part(const MeshPart& part, const PartFitOptions& o) {
     out.samples.push_back({j + d * (o.opening_offset * s / norm(d)), d / norm(d)});
     ++out.closure_points;
   }
-  auto hrbf = std::make_shared<const Hrbf>(out.samples, o.hrbf, name);
+}
+
+/// The compact field `t_r(d)` of the fitted HRBF into `out.local`, `out.r` = the largest distance
+/// from the bone segment to a sample. Support box: the samples' box grown by margin × r, grown
+/// further (up to 8×) until d >= r on all its faces (d is not a true distance: |∇d| may fall
+/// below 1 away from the samples).
+void compact_field(const std::shared_ptr<const Hrbf>& hrbf, double len, const PartFitOptions& o,
+                   const std::string& name, FittedPart& out) {
   Box3d sbox;
   for (const HrbfSample& s : hrbf->samples()) {
     sbox.extend(s.position);
     out.r = std::max(out.r, segment_distance(s.position, len));
   }
-  // Support box: samples grown by margin × r, grown further (up to 8×) until d >= r on all its
-  // faces (d is not a true distance: |∇d| may fall below 1 away from the samples).
   std::string last_error;
   for (double grow : {1.0, 1.5, 2.0, 3.0, 4.0, 6.0, 8.0}) {
     const double g = o.support_margin * grow * out.r;
@@ -233,6 +273,27 @@ FittedPart fit_part(const MeshPart& part, const PartFitOptions& o) {
   require(out.local != nullptr, name,
           "the HRBF field does not vanish on any support box tried (" + last_error + ")",
           "check the part's samples and normals");
+}
+
+}  // namespace
+
+FittedPart fit_part(const MeshPart& part, const PartFitOptions& o) {
+  const std::string& name = part.name;
+  validate_options(o, name);
+  const double len = checked_bone_length(part);
+  FittedPart out;
+  out.local_to_world = bone_frame(part.bone_start, part.bone_end);
+  const LocalMesh mesh = local_mesh(part, out.local_to_world, len);
+  const std::size_t ncand = std::size_t(o.target_samples) * std::size_t(o.candidates_per_sample);
+  const std::vector<HrbfSample> cand = candidates(part, mesh, o, ncand);
+  require(cand.size() >= 4, name, "fewer than 4 surface samples survive the culling planes",
+          "check that the sub-mesh surrounds its bone, or lower PartFitOptions::cull_h");
+  const double kept_area = mesh.area * double(cand.size()) / double(ncand);
+  for (std::size_t i : poisson_disk(cand, std::size_t(o.target_samples), kept_area))
+    out.samples.push_back(cand[i]);
+  require_outward(out.samples, len, name);
+  add_closure_points(part, mesh, o, out);
+  compact_field(std::make_shared<const Hrbf>(out.samples, o.hrbf, name), len, o, name, out);
   if (o.sample_grid) {
     GridFieldOptions go;
     go.resolution = o.grid_resolution;
