@@ -55,14 +55,11 @@ std::vector<HrbfSample> merge_close(const std::vector<HrbfSample>& in, double ra
   return out;
 }
 
-}  // namespace
-
-Hrbf::Hrbf(const std::vector<HrbfSample>& samples, const HrbfOptions& options, const std::string& name) {
-  require(options.merge_distance >= 0 && std::isfinite(options.merge_distance), name + " merge_distance",
-          "must be finite and >= 0", "use the default 1e-3");
+/// The samples with unit normals (checked finite and non-zero), and their bounding box.
+std::vector<HrbfSample> normalised_samples(const std::vector<HrbfSample>& samples, const std::string& name,
+                                           Box3d& box) {
   std::vector<HrbfSample> clean;
   clean.reserve(samples.size());
-  Box3d box;
   for (std::size_t i = 0; i < samples.size(); ++i) {
     const HrbfSample& s = samples[i];
     const double len = norm(s.normal);
@@ -74,23 +71,17 @@ Hrbf::Hrbf(const std::vector<HrbfSample>& samples, const HrbfOptions& options, c
     clean.push_back({s.position, s.normal / len});
     box.extend(s.position);
   }
-  require(clean.size() >= 4, name, "needs at least 4 samples, got " + std::to_string(clean.size()),
-          "give the part more surface or lower the culling distance");
-  const double diag = norm(box.size());
-  require(diag > 0, name, "all samples coincide", "give the part a surface with some extent");
-  samples_ = merge_close(clean, options.merge_distance * diag, name);
-  const std::size_t m = samples_.size();
-  require(m >= 4, name, "needs at least 4 distinct samples after merging, got " + std::to_string(m),
-          "give the part more surface or lower HrbfOptions::merge_distance");
+  return clean;
+}
 
-  center_ = (box.lo + box.hi) * 0.5;
-  scale_ = 0.5 * diag;
-  std::vector<Vec3d> y(m);
-  for (std::size_t i = 0; i < m; ++i) y[i] = (samples_[i].position - center_) / scale_;
-
+/// The (4m + 4)² interpolation system at the normalised positions `y` (rows 4i..4i+3: `d(yi) = 0`,
+/// `∇d(yi) = ni`; the last 4: the affine part's orthogonality conditions) and its right side.
+void assemble_system(const std::vector<Vec3d>& y, const std::vector<HrbfSample>& samples, Eigen::MatrixXd& A,
+                     Eigen::VectorXd& rhs) {
+  const std::size_t m = y.size();
   const Eigen::Index n = Eigen::Index(4 * m + 4);
-  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(n, n);
-  Eigen::VectorXd rhs = Eigen::VectorXd::Zero(n);
+  A = Eigen::MatrixXd::Zero(n, n);
+  rhs = Eigen::VectorXd::Zero(n);
   const Eigen::Index aff = Eigen::Index(4 * m);
   for (std::size_t i = 0; i < m; ++i) {
     const Eigen::Index ri = Eigen::Index(4 * i);
@@ -112,7 +103,7 @@ Hrbf::Hrbf(const std::vector<HrbfSample>& samples, const HrbfOptions& options, c
     for (int a = 0; a < 3; ++a) {
       A(ri, aff + a) = y[i][a];
       A(ri + 1 + a, aff + a) = 1;
-      rhs(ri + 1 + a) = samples_[i].normal[a];
+      rhs(ri + 1 + a) = samples[i].normal[a];
       // Orthogonality to the affine part: Σ λk yk − βk = 0 (rows aff..aff+2), Σ λk = 0 (row
       // aff+3). With d's `+ βk·∇φ` sign this cancels the |x|² far-field growth (the |x|³ term
       // cancels by Σ λk = 0), so d grows at most linearly away from the samples.
@@ -122,6 +113,31 @@ Hrbf::Hrbf(const std::vector<HrbfSample>& samples, const HrbfOptions& options, c
     A(ri, aff + 3) = 1;
     A(aff + 3, ri) = 1;
   }
+}
+
+}  // namespace
+
+Hrbf::Hrbf(const std::vector<HrbfSample>& samples, const HrbfOptions& options, const std::string& name) {
+  require(options.merge_distance >= 0 && std::isfinite(options.merge_distance), name + " merge_distance",
+          "must be finite and >= 0", "use the default 1e-3");
+  Box3d box;
+  const std::vector<HrbfSample> clean = normalised_samples(samples, name, box);
+  require(clean.size() >= 4, name, "needs at least 4 samples, got " + std::to_string(clean.size()),
+          "give the part more surface or lower the culling distance");
+  const double diag = norm(box.size());
+  require(diag > 0, name, "all samples coincide", "give the part a surface with some extent");
+  samples_ = merge_close(clean, options.merge_distance * diag, name);
+  const std::size_t m = samples_.size();
+  require(m >= 4, name, "needs at least 4 distinct samples after merging, got " + std::to_string(m),
+          "give the part more surface or lower HrbfOptions::merge_distance");
+
+  center_ = (box.lo + box.hi) * 0.5;
+  scale_ = 0.5 * diag;
+  std::vector<Vec3d> y(m);
+  for (std::size_t i = 0; i < m; ++i) y[i] = (samples_[i].position - center_) / scale_;
+  Eigen::MatrixXd A;
+  Eigen::VectorXd rhs;
+  assemble_system(y, samples_, A, rhs);
   // In-place factorisation (no copy of the 4m+4 square matrix); the interpolation residual is
   // checked below on the evaluated HRBF instead of by iterative refinement.
   const Eigen::PartialPivLU<Eigen::Ref<Eigen::MatrixXd>> lu(A);
@@ -131,21 +147,7 @@ Hrbf::Hrbf(const std::vector<HrbfSample>& samples, const HrbfOptions& options, c
           "remove near-duplicate or coplanar clusters of samples, or raise HrbfOptions::merge_distance");
   const Eigen::VectorXd x = lu.solve(rhs);
   require(x.allFinite(), name, "the HRBF solve produced non-finite coefficients", "check the samples");
-
-  // Struct of arrays padded to a multiple of kHrbfLanes with zero coefficients (they add 0).
-  const std::size_t mp = (m + kHrbfLanes - 1) / kHrbfLanes * kHrbfLanes;
-  d_.assign(7 * mp, 0.0);
-  for (std::size_t k = 0; k < m; ++k) {
-    d_[k] = y[k].x;
-    d_[mp + k] = y[k].y;
-    d_[2 * mp + k] = y[k].z;
-    d_[3 * mp + k] = x(Eigen::Index(4 * k));
-    d_[4 * mp + k] = x(Eigen::Index(4 * k + 1));
-    d_[5 * mp + k] = x(Eigen::Index(4 * k + 2));
-    d_[6 * mp + k] = x(Eigen::Index(4 * k + 3));
-  }
-  for (int a = 0; a < 4; ++a) affine_[a] = x(aff + a);
-  f_.assign(d_.begin(), d_.end());
+  store_coefficients(y, x.data());
 
   residual_ = 0;
   for (const HrbfSample& s : samples_) {
@@ -156,6 +158,25 @@ Hrbf::Hrbf(const std::vector<HrbfSample>& samples, const HrbfOptions& options, c
   require(residual_ <= options.max_residual, name,
           "the HRBF does not interpolate its samples (residual " + format_number(residual_) + ")",
           "remove near-duplicate samples or raise HrbfOptions::merge_distance");
+}
+
+void Hrbf::store_coefficients(const std::vector<Vec3d>& y, const double* x) {
+  // Struct of arrays padded to a multiple of kHrbfLanes with zero coefficients (they add 0).
+  const std::size_t m = y.size();
+  const std::size_t aff = 4 * m;
+  const std::size_t mp = (m + kHrbfLanes - 1) / kHrbfLanes * kHrbfLanes;
+  d_.assign(7 * mp, 0.0);
+  for (std::size_t k = 0; k < m; ++k) {
+    d_[k] = y[k].x;
+    d_[mp + k] = y[k].y;
+    d_[2 * mp + k] = y[k].z;
+    d_[3 * mp + k] = x[4 * k];
+    d_[4 * mp + k] = x[4 * k + 1];
+    d_[5 * mp + k] = x[4 * k + 2];
+    d_[6 * mp + k] = x[4 * k + 3];
+  }
+  for (std::size_t a = 0; a < 4; ++a) affine_[a] = x[aff + a];
+  f_.assign(d_.begin(), d_.end());
 }
 
 HrbfViewT<double> Hrbf::view_d() const {

@@ -26,14 +26,17 @@ struct HrbfSample {
   Vec3d normal{};
 };
 
+/// Safeguards of the fit (none is in the papers, which assume clean samples).
 struct HrbfOptions {
   /// Samples closer than `merge_distance` × (sample bounding-box diagonal) are merged into one
-  /// (mean position, normalised mean normal). Normals that cancel when merged throw.
+  /// (mean position, normalised mean normal); >= 0, default 1e-3. Normals that cancel when
+  /// merged throw.
   double merge_distance = 1e-3;
   /// Fits whose estimated reciprocal condition number (1-norm, LU) is below this throw.
+  /// Default 1e-13.
   double min_rcond = 1e-13;
   /// Fits whose interpolation residual (value, or gradient minus normal; relative to the
-  /// bounding-box diagonal / to 1) exceeds this throw: never a silent garbage field.
+  /// bounding-box diagonal / to 1) exceeds this throw: never a silent garbage field. Default 1e-6.
   double max_residual = 1e-6;
 };
 
@@ -112,6 +115,10 @@ class Hrbf {
   HrbfViewT<float> view_f() const;
 
  private:
+  /// The solution `x` (4m + 4: λk, βk per sample, then the affine part) at the normalised
+  /// positions `y`, as padded arrays in double and float.
+  void store_coefficients(const std::vector<Vec3d>& y, const double* x);
+
   std::vector<HrbfSample> samples_;
   std::vector<double> d_;  // 7 m: cx cy cz lambda bx by bz
   std::vector<float> f_;
