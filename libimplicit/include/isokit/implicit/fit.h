@@ -45,20 +45,25 @@ struct MeshPart {
 };
 
 struct PartFitOptions {
-  int target_samples = 50;         ///< Poisson-disk samples wanted (2013: "50 ... always sufficient")
-  std::uint64_t seed = 1;          ///< sampling is deterministic for a seed
-  int candidates_per_sample = 10;  ///< random candidates per wanted sample
-  double cull_h = 0.05;            ///< culling planes at this fraction of the bone length (2013 eq. 2)
-  bool close_start = true;         ///< closure point beyond bone_start
-  bool close_end = true;           ///< closure point beyond bone_end
+  /// Poisson-disk samples wanted, in [4, 10000] (2013 §4.1: "50 ... always sufficient").
+  int target_samples = 50;
+  std::uint64_t seed = 1;          ///< seed of the candidates' generator: same seed, same samples
+  int candidates_per_sample = 10;  ///< random surface candidates per wanted sample (>= 1; not in the papers)
+  /// Culling planes at this fraction of the bone length from both ends, in [0, 0.5) (2013 eq. 2:
+  /// h = 0.05).
+  double cull_h = 0.05;
+  bool close_start = true;  ///< closure point beyond bone_start (2013 §4.1, Fig. 3)
+  bool close_end = true;    ///< closure point beyond bone_end (2013 §4.1, Fig. 3)
   /// Closure points of `MeshPart::openings` lie this fraction of `s` beyond their joint (not in
   /// the papers, which close bone ends at `s`: a branching part's cap at `s` reaches into its
   /// children and makes contact with them at rest; docs/skinning.md, "fitting").
   double opening_offset = 0.1;
-  double support_margin = 1.0;  ///< support box = sample box grown by margin × r (checked)
-  bool sample_grid = true;      ///< also build the grid (2013 §6)
-  int grid_resolution = 32;
-  HrbfOptions hrbf{};
+  /// Support box = the samples' box grown by `support_margin × r` (> 0; grown further, up to 8×,
+  /// until the field vanishes on its faces). Not in the papers.
+  double support_margin = 1.0;
+  bool sample_grid = true;   ///< also sample the field into a grid (2013 §6: 32³ textures)
+  int grid_resolution = 32;  ///< grid nodes per axis, in [2, GridField::kMaxResolution] (2013 §6: 32)
+  HrbfOptions hrbf{};        ///< the HRBF fit's options (hrbf.h)
 };
 
 /// The fitted primitive. `local` is in the bone frame: origin `bone_start`, +z along the bone
