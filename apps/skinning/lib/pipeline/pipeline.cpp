@@ -169,136 +169,193 @@ FrameMetrics Skinner::measure(const Pose& pose, const track::Positions& position
   return m;
 }
 
-BakeResult Skinner::bake(Method method, const std::vector<Pose>& poses, const BakeOptions& options) {
-  require(!poses.empty(), rig_.name + ": animation", "has no frames", "give a clip, --bend or a pose script");
+namespace {
+
+/// What one bake carries from frame to frame, per method.
+struct BakeState {
+  std::unique_ptr<track::IsoSurfaceTracker> tracker;  ///< tracking2014
+  std::unique_ptr<AxisGuard> guard;                   ///< tracking2014, SkinSetup::axis_guard
+  std::unique_ptr<track::Projector2013> projector;    ///< implicit2013
+  SkinField* field{nullptr};                          ///< the implicit methods' field
+  track::Positions current;                           ///< tracking2014: the last result
+  Pose previous;                                      ///< tracking2014: the last frame's pose
+  std::vector<Affine> prev_skin;                      ///< tracking2014: the last sub-step's matrices
+};
+
+void check_poses(const Rig& rig, const std::vector<Pose>& poses) {
+  require(!poses.empty(), rig.name + ": animation", "has no frames", "give a clip, --bend or a pose script");
   for (const Pose& p : poses)
-    require(p.size() == rig_.joints.size(), rig_.name + ": animation", "a pose has the wrong joint count",
+    require(p.size() == rig.joints.size(), rig.name + ": animation", "a pose has the wrong joint count",
             "one local transform per joint");
+}
+
+/// The 2014 tracker on the rest mesh (2014 §5): iso-values sampled at rest, triangles inverted at
+/// rest recorded, the per-joint relaxation mask (2014 Fig. 11) and the fold-repair mask of parts
+/// too small for its smoothing (docs/skinning.md, "Low-poly rigs").
+std::unique_ptr<track::IsoSurfaceTracker> make_tracker(const Skinner& sk, const SkinField& field,
+                                                       std::size_t grain) {
+  const Rig& rig = sk.rig();
+  const SkinSetup& setup = sk.setup();
+  const std::vector<int>& partition = sk.fitted().partition();
+  const int nv = static_cast<int>(rig.rest.rows());
+  std::vector<float> iso = track::sample_iso_values(field.function(), rig.rest);
+  track::TrackerOptions to = setup.tracker;
+  to.grain = grain;
+  auto tracker = std::make_unique<track::IsoSurfaceTracker>(rig.rest, rig.triangles, std::move(iso), to);
+  tracker->mark_rest_inversions(field.function());
+  std::vector<float> mask(static_cast<std::size_t>(nv));
+  for (int v = 0; v < nv; ++v) mask[v] = setup.relaxation_for(rig.joints[partition[v]].name);
+  tracker->set_relaxation_mask(std::move(mask));
+  if (setup.fold_repair_min_part_vertices > 0) {
+    std::vector<std::uint8_t> movable(static_cast<std::size_t>(nv));
+    for (int v = 0; v < nv; ++v)
+      movable[v] =
+          sk.fitted().bones()[static_cast<std::size_t>(partition[v])].vertices >= setup.fold_repair_min_part_vertices
+              ? 1
+              : 0;
+    tracker->set_fold_repair_mask(std::move(movable));
+  }
+  return tracker;
+}
+
+/// Stage 1 of a 2014 sub-step (2014 §5): each vertex moved by its partition joint's rigid delta
+/// from the last sub-step's matrices to `skin`.
+void move_by_rigid_deltas(const std::vector<int>& partition, const std::vector<Affine>& prev_skin,
+                          const std::vector<Affine>& skin, std::size_t grain, track::Positions& current) {
+  std::vector<Eigen::Matrix<double, 3, 4>> delta(skin.size());
+  for (std::size_t j = 0; j < skin.size(); ++j)
+    delta[j] = (rigid_part(skin[j]) * rigid_part(prev_skin[j]).inverse()).matrix().topRows<3>();
+  parallel_for(static_cast<std::size_t>(current.rows()), grain, [&](std::size_t b, std::size_t e) {
+    for (std::size_t v = b; v < e; ++v) {
+      const Eigen::Vector4d p(current(v, 0), current(v, 1), current(v, 2), 1.0);
+      current.row(static_cast<Eigen::Index>(v)) = (delta[partition[v]] * p).cast<float>().transpose();
+    }
+  });
+}
+
+/// One frame of tracking2014: the 2014 sub-step rule (§5.2), then per sub-step stage 1, the DQS
+/// rotations as the ARAP targets, the axis guard and the tracker (stage 2).
+void track_frame(const Skinner& sk, BakeState& s, const Pose& pose, std::size_t grain, FrameStats& st) {
+  const Rig& rig = sk.rig();
+  const int n = substeps(rig, s.previous, pose, sk.setup().substeps);
+  st.substeps = n;
+  std::vector<Mat3f> rotations;
+  track::Positions scratch;
+  for (int k = 1; k <= n; ++k) {
+    const Pose ps = k == n ? pose : interpolate(s.previous, pose, double(k) / n);
+    const std::vector<Affine> skin = skinning_matrices(rig, ps);
+    move_by_rigid_deltas(sk.fitted().partition(), s.prev_skin, skin, grain, s.current);
+    dual_quaternion_blend(rig.weights, skin, rig.rest, scratch, &rotations, grain);
+    if (s.guard) st.axis_guard_moves += s.guard->apply(skin, s.current);
+    s.field->set_pose(skin);
+    const track::TrackStats ts = s.tracker->track(s.field->function(), rotations, s.current);
+    st.iterations += ts.iterations;
+    st.vertex_updates += double(ts.vertex_updates);
+    st.field_evaluations += double(ts.field_evaluations);
+    st.lost_vertices = ts.lost_vertices;
+    st.oriented_vertices += ts.oriented_vertices;
+    s.prev_skin = skin;
+  }
+  s.previous = pose;
+}
+
+/// Deforms the rest mesh to `pose` by the bake's method into `pos`; returns the method's contact
+/// flags (the implicit methods), else null.
+const std::vector<std::uint8_t>* deform(const Skinner& sk, Method method, BakeState& s, const Pose& pose,
+                                        std::size_t grain, FrameStats& st, track::Positions& pos) {
+  const Rig& rig = sk.rig();
+  const std::vector<Affine> skin = skinning_matrices(rig, pose);
+  switch (method) {
+    case Method::kLbs:
+      linear_blend(rig.weights, skin, rig.rest, pos, grain);
+      return nullptr;
+    case Method::kDqs:
+      dual_quaternion_blend(rig.weights, skin, rig.rest, pos, nullptr, grain);
+      return nullptr;
+    case Method::kImplicit2013: {
+      dual_quaternion_blend(rig.weights, skin, rig.rest, pos, nullptr, grain);
+      s.field->set_pose(skin);
+      const track::TrackStats ts = s.projector->project(s.field->function(), pos);
+      st.iterations = ts.iterations;
+      st.vertex_updates = double(rig.rest.rows()) * ts.iterations;
+      st.field_evaluations = st.vertex_updates;
+      st.lost_vertices = ts.lost_vertices;
+      return &s.projector->flags().contact;
+    }
+    case Method::kTracking2014:
+      track_frame(sk, s, pose, grain, st);
+      pos = s.current;
+      return &s.tracker->flags().contact;
+  }
+  return nullptr;
+}
+
+/// The bake's state at the rest pose: the implicit methods' field at rest, the tracker or the
+/// projector built on it.
+void start_bake(Skinner& sk, Method method, const BakeOptions& options, BakeState& s) {
+  const Rig& rig = sk.rig();
+  const SkinSetup& setup = sk.setup();
+  const Pose rest = rest_pose(rig);
+  if (method == Method::kTracking2014) {
+    s.field = &sk.field(setup.tree == TreeKind::k2013 ? TreeKind::k2013 : TreeKind::k2014);
+    s.field->set_pose(skinning_matrices(rig, rest));
+    s.tracker = make_tracker(sk, *s.field, options.grain);
+    if (setup.axis_guard) s.guard = std::make_unique<AxisGuard>(sk.fitted());
+  } else if (method == Method::kImplicit2013) {
+    s.field = &sk.field(setup.tree == TreeKind::k2014 ? TreeKind::k2014 : TreeKind::k2013);
+    s.field->set_pose(skinning_matrices(rig, rest));
+    track::ProjectorOptions po = setup.projector;
+    po.grain = options.grain;
+    s.projector = std::make_unique<track::Projector2013>(rig.rest, rig.triangles, s.field->function(), po);
+  }
+  s.current = rig.rest;
+  s.previous = rest;
+  s.prev_skin = skinning_matrices(rig, rest);
+}
+
+/// A frame's metrics (Skinner::measure).
+FrameMetrics measure_frame(Skinner& sk, const Pose& pose, const track::Positions& pos, const BakeOptions& options,
+                           const std::vector<std::uint8_t>* contact, const track::IsoSurfaceTracker* tracker) {
+  // The iso residual leaves out the method's contact vertices and, with the tracker, the vertices
+  // it smoothed (β > 0).
+  std::vector<std::uint8_t> excluded;
+  if (contact) {
+    excluded = *contact;
+    if (tracker)
+      for (std::size_t v = 0; v < excluded.size(); ++v) excluded[v] |= tracker->flags().beta[v] > 0 ? 1 : 0;
+  }
+  return sk.measure(pose, pos, options.self_intersections, contact ? &excluded : nullptr);
+}
+
+}  // namespace
+
+BakeResult Skinner::bake(Method method, const std::vector<Pose>& poses, const BakeOptions& options) {
+  check_poses(rig_, poses);
   BakeResult out;
   out.method = method;
-  const Pose rest = rest_pose(rig_);
-  const int nv = static_cast<int>(rig_.rest.rows());
-  const std::vector<int>& partition = fitted_->partition();
-
-  std::unique_ptr<track::IsoSurfaceTracker> tracker;
-  std::unique_ptr<AxisGuard> guard;
-  std::unique_ptr<track::Projector2013> projector;
-  SkinField* field = nullptr;
-  if (method == Method::kTracking2014) {
-    field = &this->field(setup_.tree == TreeKind::k2013 ? TreeKind::k2013 : TreeKind::k2014);
-    field->set_pose(skinning_matrices(rig_, rest));
-    std::vector<float> iso = track::sample_iso_values(field->function(), rig_.rest);
-    track::TrackerOptions to = setup_.tracker;
-    to.grain = options.grain;
-    tracker = std::make_unique<track::IsoSurfaceTracker>(rig_.rest, rig_.triangles, std::move(iso), to);
-    tracker->mark_rest_inversions(field->function());
-    std::vector<float> mask(static_cast<std::size_t>(nv));
-    for (int v = 0; v < nv; ++v) mask[v] = setup_.relaxation_for(rig_.joints[partition[v]].name);
-    tracker->set_relaxation_mask(std::move(mask));
-    if (setup_.fold_repair_min_part_vertices > 0) {
-      // Parts too small for the fold repair's smoothing (docs/skinning.md, "Low-poly rigs").
-      std::vector<std::uint8_t> movable(static_cast<std::size_t>(nv));
-      for (int v = 0; v < nv; ++v)
-        movable[v] = fitted_->bones()[static_cast<std::size_t>(partition[v])].vertices >=
-                             setup_.fold_repair_min_part_vertices
-                         ? 1
-                         : 0;
-      tracker->set_fold_repair_mask(std::move(movable));
-    }
-    if (setup_.axis_guard) guard = std::make_unique<AxisGuard>(*fitted_);
-  } else if (method == Method::kImplicit2013) {
-    field = &this->field(setup_.tree == TreeKind::k2014 ? TreeKind::k2014 : TreeKind::k2013);
-    field->set_pose(skinning_matrices(rig_, rest));
-    track::ProjectorOptions po = setup_.projector;
-    po.grain = options.grain;
-    projector = std::make_unique<track::Projector2013>(rig_.rest, rig_.triangles, field->function(), po);
-  }
-
-  track::Positions current = rig_.rest;
-  Pose previous = rest;
-  std::vector<Affine> prev_skin = skinning_matrices(rig_, rest);
+  BakeState s;
+  start_bake(*this, method, options, s);
   double total_ms = 0, vertex_iterations = 0;
   for (std::size_t f = 0; f < poses.size(); ++f) {
     FrameStats st;
     const auto t0 = Clock::now();
-    const std::vector<Affine> skin = skinning_matrices(rig_, poses[f]);
     track::Positions pos;
-    const std::vector<std::uint8_t>* contact = nullptr;
-    switch (method) {
-      case Method::kLbs:
-        linear_blend(rig_.weights, skin, rig_.rest, pos, options.grain);
-        break;
-      case Method::kDqs:
-        dual_quaternion_blend(rig_.weights, skin, rig_.rest, pos, nullptr, options.grain);
-        break;
-      case Method::kImplicit2013: {
-        dual_quaternion_blend(rig_.weights, skin, rig_.rest, pos, nullptr, options.grain);
-        field->set_pose(skin);
-        const track::TrackStats ts = projector->project(field->function(), pos);
-        st.iterations = ts.iterations;
-        st.vertex_updates = double(nv) * ts.iterations;
-        st.field_evaluations = st.vertex_updates;
-        st.lost_vertices = ts.lost_vertices;
-        contact = &projector->flags().contact;
-        break;
-      }
-      case Method::kTracking2014: {
-        const int n = substeps(rig_, previous, poses[f], setup_.substeps);
-        st.substeps = n;
-        std::vector<Mat3f> rotations;
-        track::Positions scratch;
-        for (int s = 1; s <= n; ++s) {
-          const Pose ps = s == n ? poses[f] : interpolate(previous, poses[f], double(s) / n);
-          const std::vector<Affine> sk = skinning_matrices(rig_, ps);
-          // Stage 1 (2014 §5): each vertex moved by its partition joint's rigid delta.
-          std::vector<Eigen::Matrix<double, 3, 4>> delta(sk.size());
-          for (std::size_t j = 0; j < sk.size(); ++j)
-            delta[j] = (rigid_part(sk[j]) * rigid_part(prev_skin[j]).inverse()).matrix().topRows<3>();
-          parallel_for(static_cast<std::size_t>(nv), options.grain, [&](std::size_t b, std::size_t e) {
-            for (std::size_t v = b; v < e; ++v) {
-              const Eigen::Vector4d p(current(v, 0), current(v, 1), current(v, 2), 1.0);
-              current.row(static_cast<Eigen::Index>(v)) = (delta[partition[v]] * p).cast<float>().transpose();
-            }
-          });
-          dual_quaternion_blend(rig_.weights, sk, rig_.rest, scratch, &rotations, options.grain);
-          if (guard) st.axis_guard_moves += guard->apply(sk, current);
-          field->set_pose(sk);
-          const track::TrackStats ts = tracker->track(field->function(), rotations, current);
-          st.iterations += ts.iterations;
-          st.vertex_updates += double(ts.vertex_updates);
-          st.field_evaluations += double(ts.field_evaluations);
-          st.lost_vertices = ts.lost_vertices;
-          st.oriented_vertices += ts.oriented_vertices;
-          prev_skin = sk;
-        }
-        previous = poses[f];
-        pos = current;
-        contact = &tracker->flags().contact;
-        break;
-      }
-    }
+    const std::vector<std::uint8_t>* contact = deform(*this, method, s, poses[f], options.grain, st, pos);
     st.ms = ms_since(t0);
     total_ms += st.ms;
     vertex_iterations += st.vertex_updates;
     if (options.metrics) {
-      std::vector<std::uint8_t> excluded;
-      if (contact) {
-        excluded = *contact;
-        if (tracker)
-          for (int v = 0; v < nv; ++v) excluded[v] |= tracker->flags().beta[v] > 0 ? 1 : 0;
-      }
-      st.metrics = measure(poses[f], pos, options.self_intersections, contact ? &excluded : nullptr);
+      st.metrics = measure_frame(*this, poses[f], pos, options, contact, s.tracker.get());
       out.worst = f == 0 ? st.metrics : worst_of(out.worst, st.metrics);
     }
     if (progress_)
-      progress_(std::string("bake ") + to_string(method), static_cast<int>(f + 1),
-                static_cast<int>(poses.size()));
+      progress_(std::string("bake ") + to_string(method), static_cast<int>(f + 1), static_cast<int>(poses.size()));
     out.frames.push_back(std::move(pos));
     out.stats.push_back(st);
   }
   out.mean_ms = total_ms / double(poses.size());
   out.vertex_iterations_per_second = total_ms > 0 ? vertex_iterations / (total_ms * 1e-3) : 0;
-  if (same_pose(poses.back(), rest))
+  if (same_pose(poses.back(), rest_pose(rig_)))
     out.rest_recovery = max_displacement(out.frames.back(), rig_.rest) / bbox_diagonal(rig_.rest);
   return out;
 }
