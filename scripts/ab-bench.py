@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """A/B benchmark of two builds, alternated in one run (docs/performance.md protocol).
 
-  scripts/ab-bench.py OLD_BUILD NEW_BUILD [--rounds 3] [--case PROGRAM:FILTER ...]
+  scripts/ab-bench.py OLD_BUILD NEW_BUILD [--rounds 3] [--min-time S] [--case PROGRAM:FILTER ...]
 
 For each round and each case, runs OLD_BUILD/bench/PROGRAM then NEW_BUILD/bench/PROGRAM with
 `--benchmark_filter=FILTER` (one repetition each, so that the two builds alternate and share the
@@ -24,12 +24,12 @@ DEFAULT_CASES = [
 UNIT = {"ns": 1e-6, "us": 1e-3, "ms": 1.0, "s": 1e3}
 
 
-def run(build, program, pattern):
+def run(build, program, pattern, min_time):
     exe = os.path.join(build, "bench", program)
     with tempfile.NamedTemporaryFile(suffix=".json", delete=False) as f:
         out = f.name
     subprocess.run([exe, f"--benchmark_filter={pattern}", f"--benchmark_out={out}",
-                    "--benchmark_out_format=json"], check=True, stdout=subprocess.DEVNULL)
+                    "--benchmark_out_format=json"] + ([f"--benchmark_min_time={min_time}"] if min_time else []), check=True, stdout=subprocess.DEVNULL)
     with open(out) as f:
         data = json.load(f)
     os.unlink(out)
@@ -47,6 +47,8 @@ def main():
     ap.add_argument("new")
     ap.add_argument("--rounds", type=int, default=3)
     ap.add_argument("--case", action="append", dest="cases")
+    ap.add_argument("--min-time", type=float, default=0,
+                    help="--benchmark_min_time per benchmark, seconds (benchmarks with fixed iterations ignore it)")
     ap.add_argument("--low", type=float, default=0.95)
     ap.add_argument("--high", type=float, default=1.05)
     a = ap.parse_args()
@@ -56,9 +58,9 @@ def main():
         for case in cases:
             program, pattern = case.split(":", 1)
             print(f"ab-bench: round {r + 1}/{a.rounds} {program} {pattern}", file=sys.stderr, flush=True)
-            for name, t in run(a.old, program, pattern).items():
+            for name, t in run(a.old, program, pattern, a.min_time).items():
                 old.setdefault(name, []).append(t)
-            for name, t in run(a.new, program, pattern).items():
+            for name, t in run(a.new, program, pattern, a.min_time).items():
                 new.setdefault(name, []).append(t)
     print("| benchmark | old ms (median) | new ms (median) | new / old (median of rounds) | rounds |")
     print("|---|---:|---:|---:|---:|")
