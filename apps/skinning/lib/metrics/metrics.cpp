@@ -76,7 +76,85 @@ int worse(int a, int b) {
   return std::max(a, b);
 }  // -1 = not computed
 
+/// Union-find root with path halving.
+int root(std::vector<int>& parent, int v) {
+  while (parent[v] != v) v = parent[v] = parent[parent[v]];
+  return v;
+}
+
+/// Component of each triangle (joined through shared vertices), numbered by first triangle.
+std::vector<int> triangle_components(const track::Triangles& triangles, Eigen::Index num_vertices, int& count) {
+  std::vector<int> parent(static_cast<std::size_t>(num_vertices));
+  for (std::size_t v = 0; v < parent.size(); ++v) parent[v] = static_cast<int>(v);
+  for (Eigen::Index f = 0; f < triangles.rows(); ++f)
+    for (int c = 1; c < 3; ++c) parent[root(parent, triangles(f, c))] = root(parent, triangles(f, 0));
+  std::vector<int> id(parent.size(), -1), component(static_cast<std::size_t>(triangles.rows()));
+  count = 0;
+  for (Eigen::Index f = 0; f < triangles.rows(); ++f) {
+    int& c = id[static_cast<std::size_t>(root(parent, triangles(f, 0)))];
+    if (c < 0) c = count++;
+    component[static_cast<std::size_t>(f)] = c;
+  }
+  return component;
+}
+
+/// Classifies each undirected edge by its directed uses (`lo << 33 | hi << 1 | reversed`, sorted)
+/// and adds its defect to the component of its triangles.
+void count_edge_defects(const track::Triangles& triangles, MeshClosure& out) {
+  std::vector<std::pair<std::uint64_t, int>> uses;  // (key, component)
+  uses.reserve(static_cast<std::size_t>(triangles.rows()) * 3);
+  for (Eigen::Index f = 0; f < triangles.rows(); ++f)
+    for (int c = 0; c < 3; ++c) {
+      const int a = triangles(f, c), b = triangles(f, (c + 1) % 3);
+      if (a == b) continue;
+      const auto lo = static_cast<std::uint64_t>(std::min(a, b)), hi = static_cast<std::uint64_t>(std::max(a, b));
+      uses.push_back({lo << 33 | hi << 1 | (a > b ? 1u : 0u), out.component[static_cast<std::size_t>(f)]});
+    }
+  std::sort(uses.begin(), uses.end());
+  for (std::size_t i = 0; i < uses.size();) {
+    std::size_t j = i, reversed = 0;
+    for (; j < uses.size() && uses[j].first >> 1 == uses[i].first >> 1; ++j) reversed += uses[j].first & 1;
+    MeshComponent& comp = out.components[static_cast<std::size_t>(uses[i].second)];
+    const std::size_t n = j - i;
+    comp.border_edges += n == 1 ? 1 : 0;
+    comp.non_manifold_edges += n > 2 ? 1 : 0;
+    comp.misoriented_edges += n == 2 && reversed != 1 ? 1 : 0;
+    i = j;
+  }
+}
+
+/// The rows of `triangles` whose component is closed.
+track::Triangles closed_rows(const track::Triangles& triangles, const MeshClosure& closure) {
+  std::vector<Eigen::Index> rows;
+  for (Eigen::Index f = 0; f < triangles.rows(); ++f)
+    if (closure.components[static_cast<std::size_t>(closure.component[static_cast<std::size_t>(f)])].closed())
+      rows.push_back(f);
+  track::Triangles out(static_cast<Eigen::Index>(rows.size()), 3);
+  for (std::size_t i = 0; i < rows.size(); ++i) out.row(static_cast<Eigen::Index>(i)) = triangles.row(rows[i]);
+  return out;
+}
+
 }  // namespace
+
+bool MeshClosure::closed() const {
+  return !components.empty() && closed_components() == static_cast<int>(components.size());
+}
+
+int MeshClosure::closed_components() const {
+  return static_cast<int>(std::count_if(components.begin(), components.end(),
+                                        [](const MeshComponent& c) { return c.closed(); }));
+}
+
+MeshClosure mesh_closure(const track::Triangles& triangles, Eigen::Index num_vertices) {
+  detail::check_triangles(triangles, num_vertices, "mesh_closure");
+  MeshClosure out;
+  int count = 0;
+  out.component = triangle_components(triangles, num_vertices, count);
+  out.components.resize(static_cast<std::size_t>(count));
+  for (int c : out.component) ++out.components[static_cast<std::size_t>(c)].triangles;
+  count_edge_defects(triangles, out);
+  return out;
+}
 
 double enclosed_volume(const track::Positions& positions, const track::Triangles& triangles) {
   detail::check_triangles(triangles, positions.rows(), "enclosed_volume");
@@ -123,6 +201,7 @@ double bbox_diagonal(const track::Positions& positions) {
 FrameMetrics worst_of(const FrameMetrics& a, const FrameMetrics& b) {
   FrameMetrics w;
   w.self_intersections = worse(a.self_intersections, b.self_intersections);
+  w.self_intersections_new = worse(a.self_intersections_new, b.self_intersections_new);
   w.degenerate_faces = worse(a.degenerate_faces, b.degenerate_faces);
   w.inverted_triangles = worse(a.inverted_triangles, b.inverted_triangles);
   w.new_inverted_triangles = worse(a.new_inverted_triangles, b.new_inverted_triangles);
@@ -150,20 +229,42 @@ FrameMetricsEvaluator::FrameMetricsEvaluator(track::Positions rest, track::Trian
   detail::check_triangles(triangles_, rest_.rows(), "FrameMetricsEvaluator");
   edges_ = unique_edges(triangles_);
   rest_lengths_ = edge_lengths(rest_, edges_);
-  rest_volume_ = enclosed_volume(rest_, triangles_);
+  closure_ = mesh_closure(triangles_, rest_.rows());
+  closed_triangles_ = closure_.closed() ? triangles_ : closed_rows(triangles_, closure_);
+  rest_volume_ = closed_triangles_.rows() > 0 ? enclosed_volume(rest_, closed_triangles_) : 0.0;
   rest_diagonal_ = bbox_diagonal(rest_);
 }
 
-FrameMetrics FrameMetricsEvaluator::evaluate(const track::Positions& posed) const {
+const std::vector<std::array<int, 2>>& FrameMetricsEvaluator::rest_pairs() const {
+  std::call_once(rest_pairs_once_, [this] {
+    SelfIntersectionDetails details;
+    SelfIntersectionOptions options = options_;
+    options.max_pairs = std::numeric_limits<int>::max();
+    count_self_intersections(rest_, triangles_, &details, options);
+    rest_pairs_ = std::move(details.pairs);
+  });
+  return rest_pairs_;
+}
+
+FrameMetrics FrameMetricsEvaluator::evaluate(const track::Positions& posed, bool self_intersections) const {
   detail::check_same_vertex_count(rest_, posed, "FrameMetricsEvaluator::evaluate");
   FrameMetrics m;
-  SelfIntersectionDetails details;
-  SelfIntersectionOptions options = options_;
-  options.max_pairs = 0;
-  m.self_intersections = count_self_intersections(posed, triangles_, &details, options);
-  m.degenerate_faces = details.degenerate_count;
-  m.volume = enclosed_volume(posed, triangles_);
-  if (rest_volume_ != 0) m.volume_ratio = m.volume / rest_volume_;
+  if (self_intersections) {
+    const std::vector<std::array<int, 2>>& at_rest = rest_pairs();
+    SelfIntersectionDetails details;
+    SelfIntersectionOptions options = options_;
+    options.max_pairs = std::numeric_limits<int>::max();
+    m.self_intersections = count_self_intersections(posed, triangles_, &details, options);
+    m.degenerate_faces = details.degenerate_count;
+    // Both lists are sorted: the pairs of this frame not in the rest list.
+    m.self_intersections_new = 0;
+    for (const auto& pair : details.pairs)
+      m.self_intersections_new += std::binary_search(at_rest.begin(), at_rest.end(), pair) ? 0 : 1;
+  }
+  if (closed_triangles_.rows() > 0) {
+    m.volume = enclosed_volume(posed, closed_triangles_);
+    if (rest_volume_ != 0) m.volume_ratio = m.volume / rest_volume_;
+  }
   const EdgeDistortion d = distortion(posed, edges_, rest_lengths_);
   m.edge_distortion_mean = d.mean;
   m.edge_distortion_max = d.max;

@@ -121,20 +121,7 @@ FrameMetrics Skinner::measure(const Pose& pose, const track::Positions& position
     iso2014_ = track::sample_iso_values(rest, rig_.rest);
     rest_inverted_ = inverted_flags(rest, rig_.rest, rig_.triangles);
   }
-  FrameMetricsEvaluator* ev = evaluator_.get();
-  FrameMetrics m;
-  if (self_intersections) {
-    m = ev->evaluate(positions);
-  } else {
-    // Same numbers without the exact self-intersection pass.
-    const EdgeDistortion e = edge_distortion(rig_.rest, positions, rig_.triangles);
-    m.edge_distortion_mean = e.mean;
-    m.edge_distortion_max = e.max;
-    m.volume = enclosed_volume(positions, rig_.triangles);
-    m.volume_ratio = m.volume / ev->rest_volume();
-    m.max_displacement = max_displacement(rig_.rest, positions);
-    m.rest_distance = m.max_displacement / ev->rest_diagonal();
-  }
+  FrameMetrics m = evaluator_->evaluate(positions, self_intersections);
   const track::FieldFunction f =
       metrics_field.function(metrics_field.pose_of(skinning_matrices(rig_, pose)), true);
   const std::vector<std::uint8_t> inv = inverted_flags(f, positions, rig_.triangles);
@@ -249,6 +236,8 @@ void track_frame(const Skinner& sk, BakeState& s, const Pose& pose, std::size_t 
     if (s.guard) st.axis_guard_moves += s.guard->apply(skin, s.current);
     s.field->set_pose(skin);
     const track::TrackStats ts = s.tracker->track(s.field->function(), rotations, s.current);
+    ++st.tracker_calls;
+    st.capped_calls += ts.converged ? 0 : 1;
     st.iterations += ts.iterations;
     st.vertex_updates += double(ts.vertex_updates);
     st.field_evaluations += double(ts.field_evaluations);
@@ -276,6 +265,8 @@ const std::vector<std::uint8_t>* deform(const Skinner& sk, Method method, BakeSt
       dual_quaternion_blend(rig.weights, skin, rig.rest, pos, nullptr, grain);
       s.field->set_pose(skin);
       const track::TrackStats ts = s.projector->project(s.field->function(), pos);
+      st.tracker_calls = 1;
+      st.capped_calls = ts.converged ? 0 : 1;
       st.iterations = ts.iterations;
       st.vertex_updates = double(rig.rest.rows()) * ts.iterations;
       st.field_evaluations = st.vertex_updates;

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 #include "isokit/skinning/report.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -25,6 +26,7 @@ json count(int v) {
 
 json metrics_to_json(const FrameMetrics& m) {
   return json{{"self_intersections", count(m.self_intersections)},
+              {"self_intersections_new", count(m.self_intersections_new)},
               {"degenerate_faces", count(m.degenerate_faces)},
               {"inverted_triangles", count(m.inverted_triangles)},
               {"new_inverted_triangles", count(m.new_inverted_triangles)},
@@ -35,6 +37,42 @@ json metrics_to_json(const FrameMetrics& m) {
               {"edge_distortion_max", num(m.edge_distortion_max)},
               {"volume_ratio", num(m.volume_ratio)},
               {"max_displacement", num(m.max_displacement)}};
+}
+
+/// True for the methods that call a tracker or a projector.
+bool has_tracker(Method m) {
+  return m == Method::kImplicit2013 || m == Method::kTracking2014;
+}
+
+/// The mesh's connected components and whether each is closed (volumes cover the closed ones).
+json components_json(const MeshClosure& c) {
+  json list = json::array();
+  for (const MeshComponent& k : c.components)
+    list.push_back(json{{"triangles", k.triangles},
+                        {"closed", k.closed()},
+                        {"border_edges", k.border_edges},
+                        {"non_manifold_edges", k.non_manifold_edges},
+                        {"misoriented_edges", k.misoriented_edges}});
+  return list;
+}
+
+/// Tracker calls and calls at the cap: totals over the frames and the largest per frame (null
+/// for the methods without a tracker).
+void add_call_counts(const BakeResult& r, json& method, json& worst) {
+  const bool tracked = has_tracker(r.method);
+  long long calls = 0, capped = 0;
+  int max_calls = 0, max_capped = 0;
+  for (const FrameStats& s : r.stats) {
+    calls += s.tracker_calls;
+    capped += s.capped_calls;
+    max_calls = std::max(max_calls, s.tracker_calls);
+    max_capped = std::max(max_capped, s.capped_calls);
+  }
+  method["tracker_calls"] = tracked ? json(calls) : json(nullptr);
+  method["capped_calls"] = tracked ? json(capped) : json(nullptr);
+  method["capped_share"] = tracked && calls > 0 ? json(double(capped) / double(calls)) : json(nullptr);
+  worst["tracker_calls"] = tracked ? json(max_calls) : json(nullptr);
+  worst["capped_calls"] = tracked ? json(max_capped) : json(nullptr);
 }
 
 double dqs_ms(const std::vector<BakeResult>& results) {
@@ -55,6 +93,9 @@ std::string metrics_json(const Rig& rig, const std::vector<BakeResult>& results,
   j["fps"] = c.fps;
   j["threads"] = c.threads;
   j["fit_seconds"] = c.fit_seconds;
+  const MeshClosure closure = mesh_closure(rig.triangles, rig.rest.rows());
+  j["closed"] = closure.closed();
+  j["components"] = components_json(closure);
   const double dqs = dqs_ms(results);
   json methods = json::object();
   for (const BakeResult& r : results) {
@@ -63,7 +104,9 @@ std::string metrics_json(const Rig& rig, const std::vector<BakeResult>& results,
     m["ratio_to_dqs"] = num(r.mean_ms / dqs);
     m["vertex_iterations_per_second"] = r.vertex_iterations_per_second;
     m["rest_recovery"] = r.rest_recovery >= 0 ? json(r.rest_recovery) : json(nullptr);
-    m["worst"] = metrics_to_json(r.worst);
+    json worst = metrics_to_json(r.worst);
+    add_call_counts(r, m, worst);
+    m["worst"] = worst;
     json frames = json::array();
     for (std::size_t f = 0; f < r.stats.size(); ++f) {
       const FrameStats& s = r.stats[f];
@@ -73,6 +116,8 @@ std::string metrics_json(const Rig& rig, const std::vector<BakeResult>& results,
       fr["substeps"] = s.substeps;
       fr["iterations"] = s.iterations;
       fr["lost_vertices"] = s.lost_vertices;
+      fr["tracker_calls"] = has_tracker(r.method) ? json(s.tracker_calls) : json(nullptr);
+      fr["capped_calls"] = has_tracker(r.method) ? json(s.capped_calls) : json(nullptr);
       frames.push_back(fr);
     }
     m["frames"] = frames;

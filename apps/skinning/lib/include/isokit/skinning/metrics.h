@@ -13,6 +13,7 @@
 #include <array>
 #include <cstddef>
 #include <limits>
+#include <mutex>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -55,6 +56,32 @@ int count_self_intersections(const track::Positions& positions, const track::Tri
                              SelfIntersectionDetails* details = nullptr,
                              const SelfIntersectionOptions& options = {});
 
+/// One connected component of a triangle mesh (triangles joined through shared vertices) and its
+/// edges' defects. Edges of degenerate index triples (`a == b`) are ignored.
+struct MeshComponent {
+  int triangles{0};
+  int border_edges{0};        ///< edges used by one triangle (an open border)
+  int non_manifold_edges{0};  ///< edges used by three or more triangles
+  /// Edges of two triangles that traverse them the same way (inconsistent orientation).
+  int misoriented_edges{0};
+  /// A closed, consistently oriented surface: every edge used by exactly two triangles, once in
+  /// each direction (what `enclosed_volume` needs to be meaningful).
+  bool closed() const { return border_edges == 0 && non_manifold_edges == 0 && misoriented_edges == 0; }
+};
+
+/// The components of a mesh and which triangle belongs to which.
+struct MeshClosure {
+  std::vector<int> component;               ///< `#F`: component of each triangle
+  std::vector<MeshComponent> components;    ///< in order of their first triangle
+  /// True when the mesh has triangles and every component is closed.
+  bool closed() const;
+  int closed_components() const;
+};
+
+/// Connected components and their closedness.
+/// 	hrow InputError naming the triangle for an index outside `[0, num_vertices)`.
+MeshClosure mesh_closure(const track::Triangles& triangles, Eigen::Index num_vertices);
+
 /// Signed enclosed volume by the divergence theorem, `Σ_f (p0 · (p1 × p2)) / 6` with corners taken
 /// relative to the bounding-box centre, in double. Positive for a closed mesh with outward
 /// (counter-clockwise) triangles, negative when flipped; meaningful for closed meshes only.
@@ -86,9 +113,14 @@ struct FrameMetrics {
   static constexpr double kNotComputed = std::numeric_limits<double>::quiet_NaN();
 
   int self_intersections{-1};                 ///< `count_self_intersections`
+  /// Intersecting pairs of this frame that are not an intersecting pair of the rest mesh (pairs
+  /// of triangle indices compared, not counts subtracted).
+  int self_intersections_new{-1};
   int degenerate_faces{-1};                   ///< `SelfIntersectionDetails::degenerate_count`
-  double volume{kNotComputed};                ///< `enclosed_volume`, mesh units³
-  double volume_ratio{kNotComputed};          ///< volume / rest volume
+  /// `enclosed_volume` of the closed components (`MeshClosure`), mesh units³; not computed
+  /// when no component is closed.
+  double volume{kNotComputed};
+  double volume_ratio{kNotComputed};          ///< volume / rest volume (closed components)
   double edge_distortion_mean{kNotComputed};  ///< `EdgeDistortion::mean` from rest, no unit
   double edge_distortion_max{kNotComputed};   ///< `EdgeDistortion::max` from rest, no unit
   double max_displacement{kNotComputed};      ///< from the rest positions, mesh units
@@ -111,23 +143,35 @@ struct FrameMetrics {
 FrameMetrics worst_of(const FrameMetrics& a, const FrameMetrics& b);
 
 /// Computes the geometric fields of `FrameMetrics` for many poses of one mesh: the constructor
-/// stores the rest positions, the unique edges and their rest lengths and the rest volume.
+/// stores the rest positions, the unique edges and their rest lengths, the closed components and
+/// their rest volume; the rest mesh's intersecting pairs are found on the first `evaluate` that
+/// counts self-intersections.
 class FrameMetricsEvaluator {
  public:
   /// \throw InputError for an index out of range.
   FrameMetricsEvaluator(track::Positions rest, track::Triangles triangles,
                         SelfIntersectionOptions options = {});
 
+  /// All geometric fields; without `self_intersections` the exact pass (the slowest metric) is
+  /// skipped and the two self-intersection counts stay -1.
   /// \throw InputError if `posed` has a different vertex count from the rest mesh.
-  FrameMetrics evaluate(const track::Positions& posed) const;
+  FrameMetrics evaluate(const track::Positions& posed, bool self_intersections = true) const;
 
+  const MeshClosure& closure() const { return closure_; }
+  /// Rest volume of the closed components (0 when none is closed).
   double rest_volume() const { return rest_volume_; }
   double rest_diagonal() const { return rest_diagonal_; }
+  /// The intersecting pairs of the rest mesh (all of them, sorted).
+  const std::vector<std::array<int, 2>>& rest_pairs() const;
 
  private:
   track::Positions rest_;
   track::Triangles triangles_;
+  track::Triangles closed_triangles_;  ///< the triangles of the closed components
+  MeshClosure closure_;
   SelfIntersectionOptions options_;
+  mutable std::once_flag rest_pairs_once_;
+  mutable std::vector<std::array<int, 2>> rest_pairs_;
   std::vector<std::array<int, 2>> edges_;
   std::vector<double> rest_lengths_;
   double rest_volume_{0};

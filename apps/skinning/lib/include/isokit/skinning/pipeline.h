@@ -51,6 +51,13 @@ struct FrameStats {
       0};  ///< vertices put back across their bone's axis (`AxisGuard`, summed over sub-steps)
   /// Vertices moved by the tracker's orientation repair (summed over sub-steps).
   int oriented_vertices{0};
+  /// Calls of the tracker (tracking2014: one per sub-step) or of the projector (implicit2013:
+  /// one per frame); 0 for lbs and dqs.
+  int tracker_calls{0};
+  /// Of those, the calls that stopped at the iteration cap without converging
+  /// (`TrackStats::converged` false: `TrackerOptions::max_iterations`,
+  /// `ProjectorOptions::max_iterations`).
+  int capped_calls{0};
   FrameMetrics metrics;  ///< all quality metrics (field ones with the 2014 tree)
 };
 
