@@ -503,3 +503,139 @@ TEST_CASE("frame metrics: evaluator over poses, worst of a clip", "[skinning][me
   CHECK(std::isnan(w.iso_residual_mean));
   CHECK_THROWS_AS(eval.evaluate(Positions(4, 3)), InputError);
 }
+
+namespace {
+
+/// `m` without its triangle `f` (an open border of three edges).
+Mesh without_triangle(const Mesh& m, Eigen::Index f) {
+  Mesh out = m;
+  out.f.resize(m.f.rows() - 1, 3);
+  for (Eigen::Index i = 0, k = 0; i < m.f.rows(); ++i)
+    if (i != f) out.f.row(k++) = m.f.row(i);
+  return out;
+}
+
+/// The positions of `whole` with the rows from `first` on replaced by `part`'s.
+Positions with_rows(const Positions& whole, Eigen::Index first, const Positions& part) {
+  Positions p = whole;
+  p.bottomRows(whole.rows() - first) = part;
+  return p;
+}
+
+}  // namespace
+
+TEST_CASE("closed meshes: open borders, non-manifold and misoriented edges, components", "[skinning][metrics]") {
+  const Mesh sphere = icosphere(2);
+  const MeshClosure whole = mesh_closure(sphere.f, sphere.v.rows());
+  REQUIRE(whole.components.size() == 1);
+  CHECK(whole.closed());
+  CHECK(whole.components[0].triangles == sphere.f.rows());
+
+  const Mesh open = without_triangle(sphere, 5);
+  const MeshClosure o = mesh_closure(open.f, open.v.rows());
+  CHECK_FALSE(o.closed());
+  CHECK(o.components[0].border_edges == 3);
+  // A fin on an edge of the sphere: that edge has three triangles.
+  Mesh fin = sphere;
+  fin.v.conservativeResize(fin.v.rows() + 1, 3);
+  fin.v.row(fin.v.rows() - 1) << 3.f, 0.f, 0.f;
+  fin.f.conservativeResize(fin.f.rows() + 1, 3);
+  fin.f.row(fin.f.rows() - 1) << sphere.f(0, 0), sphere.f(0, 1), static_cast<int>(fin.v.rows() - 1);
+  const MeshClosure fc = mesh_closure(fin.f, fin.v.rows());
+  CHECK_FALSE(fc.closed());
+  CHECK(fc.components[0].non_manifold_edges == 1);
+  CHECK(fc.components[0].border_edges == 2);
+  // One triangle turned over: its three edges are traversed the same way twice.
+  Mesh flipped = sphere;
+  std::swap(flipped.f(7, 1), flipped.f(7, 2));
+  const MeshClosure mc = mesh_closure(flipped.f, flipped.v.rows());
+  CHECK_FALSE(mc.closed());
+  CHECK(mc.components[0].misoriented_edges == 3);
+
+  // Two closed spheres and an open one: three components, two closed.
+  const Mesh two = join(sphere, icosphere(1, 0.5, {3, 0, 0}));
+  const Mesh three = join(two, without_triangle(icosphere(1, 0.5, {-3, 0, 0}), 0));
+  const MeshClosure c = mesh_closure(three.f, three.v.rows());
+  REQUIRE(c.components.size() == 3);
+  CHECK(c.closed_components() == 2);
+  CHECK_FALSE(c.closed());
+  CHECK(c.component[0] == 0);
+  CHECK(c.component[static_cast<std::size_t>(three.f.rows() - 1)] == 2);
+  CHECK_THROWS_WITH(mesh_closure(sphere.f, 3), Catch::Contains("triangle"));
+}
+
+TEST_CASE("frame metrics: volume over the closed components only", "[skinning][metrics]") {
+  // An open mesh: no volume at all.
+  const Mesh open = without_triangle(icosphere(2), 5);
+  const FrameMetricsEvaluator eo(open.v, open.f);
+  CHECK_FALSE(eo.closure().closed());
+  CHECK(eo.rest_volume() == 0);
+  const FrameMetrics mo = eo.evaluate(transformed(open, Eigen::Matrix3d::Identity(), {0, 0, 0}, 1.1).v);
+  CHECK(std::isnan(mo.volume));
+  CHECK(std::isnan(mo.volume_ratio));
+  CHECK(mo.edge_distortion_mean == Approx(0.1).epsilon(1e-4));
+
+  // Two closed spheres: the ratio of their summed volumes; an open third part is left out.
+  const Mesh a = icosphere(2), b = icosphere(2, 0.5, {3, 0, 0});
+  const Mesh two = join(a, b);
+  const Mesh three = join(two, without_triangle(icosphere(1, 0.5, {-3, 0, 0}), 0));
+  const FrameMetricsEvaluator e2(two.v, two.f), e3(three.v, three.f);
+  CHECK(e2.closure().closed_components() == 2);
+  CHECK(e2.rest_volume() == Approx(enclosed_volume(a.v, a.f) + enclosed_volume(b.v, b.f)).epsilon(1e-9));
+  CHECK(e3.rest_volume() == Approx(e2.rest_volume()).epsilon(1e-9));
+  // Scale the second sphere by 2 about its centre (volume × 8) and the open part by 3: only the
+  // closed ones count.
+  Positions posed = three.v;
+  posed.middleRows(a.v.rows(), b.v.rows()) = transformed(b, Eigen::Matrix3d::Identity(), {-3, 0, 0}, 2).v;
+  posed.bottomRows(three.v.rows() - two.v.rows()) *= 3.f;
+  const double va = enclosed_volume(a.v, a.f), vb = enclosed_volume(b.v, b.f);
+  CHECK(e3.evaluate(posed).volume_ratio == Approx((va + 8 * vb) / (va + vb)).epsilon(1e-5));
+}
+
+TEST_CASE("self-intersections: new pairs exclude the rest pairs by identity", "[skinning][metrics]") {
+  // At rest spheres A and B overlap (rest pairs); C is far away.
+  const Mesh a = icosphere(2), b = icosphere(2, 0.8, {1.03, 0.07, 0.11}), c = icosphere(1, 0.5, {6, 0, 0});
+  const Mesh rest = join(join(a, b), c);
+  const FrameMetricsEvaluator eval(rest.v, rest.f);
+  const int rest_pairs = si(join(a, b));
+  REQUIRE(rest_pairs > 0);
+  CHECK(static_cast<int>(eval.rest_pairs().size()) == rest_pairs);
+  const FrameMetrics at_rest = eval.evaluate(rest.v);
+  CHECK(at_rest.self_intersections == rest_pairs);
+  CHECK(at_rest.self_intersections_new == 0);
+
+  // Pose 1: C moved into A. Its pairs with A are new; the rest pairs are not.
+  const Mesh c_in = icosphere(1, 0.5, {-0.9, 0.1, 0.05});
+  const Eigen::Index first_c = a.v.rows() + b.v.rows();
+  const FrameMetrics m1 = eval.evaluate(with_rows(rest.v, first_c, c_in.v));
+  const int ac = si(join(a, c_in));
+  REQUIRE(ac > 0);
+  CHECK(m1.self_intersections == rest_pairs + ac);
+  CHECK(m1.self_intersections_new == ac);
+
+  // Pose 2: B moved away too: fewer pairs than at rest, yet C's are new (a difference of counts
+  // would say ac - rest_pairs).
+  Positions p2 = with_rows(rest.v, first_c, c_in.v);
+  p2.middleRows(a.v.rows(), b.v.rows()).rowwise() += Eigen::RowVector3f(0.f, 5.f, 0.f);
+  const FrameMetrics m2 = eval.evaluate(p2);
+  CHECK(m2.self_intersections == ac);
+  CHECK(m2.self_intersections_new == ac);
+
+  // Pose 3: B slid along A: some pairs stay, others are new; the new ones are those whose pair of
+  // triangle indices is not in the rest list.
+  Positions p3 = rest.v;
+  p3.middleRows(a.v.rows(), b.v.rows()).rowwise() += Eigen::RowVector3f(0.f, 0.f, 0.3f);
+  SelfIntersectionDetails d3;
+  const Mesh m3mesh{p3, rest.f};
+  si(m3mesh, &d3, [] { SelfIntersectionOptions o; o.max_pairs = 1 << 30; return o; }());
+  int expected = 0;
+  for (const auto& p : d3.pairs)
+    expected += std::find(eval.rest_pairs().begin(), eval.rest_pairs().end(), p) == eval.rest_pairs().end();
+  const FrameMetrics m3 = eval.evaluate(p3);
+  CHECK(m3.self_intersections_new == expected);
+  CHECK(expected > 0);
+  CHECK(expected < m3.self_intersections);
+  CHECK(worst_of(m1, m3).self_intersections_new == std::max(ac, expected));
+  // Without the exact pass neither count is computed.
+  CHECK(eval.evaluate(p3, false).self_intersections_new == -1);
+}

@@ -1,11 +1,16 @@
 // SPDX-License-Identifier: MIT
 #include <catch2/catch.hpp>
 
+#include <algorithm>
+#include <cmath>
+#include <nlohmann/json.hpp>
+
 #include "isokit/core/error.h"
 #include "isokit/core/math.h"
 #include "isokit/skinning/animation.h"
 #include "isokit/skinning/deform.h"
 #include "isokit/skinning/pipeline.h"
+#include "isokit/skinning/report.h"
 #include "pipeline_fixture.h"
 
 using namespace isokit::skinning;
@@ -280,4 +285,78 @@ TEST_CASE("pipeline: bad input to the skinner is rejected naming the item", "[sk
   CHECK(setup_from_json(R"({"fit": {"opening_offset": 1}})", "s.json").fit.opening_offset == 1.0);
   CHECK_THROWS_WITH(setup_from_json(R"({"fit": {"opening_offset": -0.5}})", "s.json"),
                     Catch::Contains("s.json.fit.opening_offset") && Catch::Contains("[0, 2]"));
+}
+
+TEST_CASE("pipeline: tracker calls per frame and the calls stopped at the iteration cap",
+          "[skinning][pipeline]") {
+  SkinSetup setup = fast_setup();
+  setup.substeps.paper_rule = false;
+  setup.substeps.max_step_rad = 0.1;
+  BakeOptions o;
+  o.self_intersections = false;
+  const Rig rig = testing::capsule_rig();
+  const auto poses = bend_animation(rig, {parse_bend("Bone1:z:90", rig)}, 5);  // 0, 45, 90, 45, 0
+  std::vector<int> expected;
+  Pose previous = rest_pose(rig);
+  for (const Pose& p : poses) {
+    expected.push_back(substeps(rig, previous, p, setup.substeps));
+    previous = p;
+  }
+  CHECK(expected[1] == 8);  // ceil(45° / 0.1 rad)
+  for (const int cap : {0, 1}) {
+    SkinSetup s = setup;
+    if (cap > 0) s.tracker.max_iterations = s.projector.max_iterations = cap;
+    Skinner sk(rig, s);
+    const BakeResult trk = sk.bake(Method::kTracking2014, poses, o);
+    const BakeResult imp = sk.bake(Method::kImplicit2013, poses, o);
+    const BakeResult dqs = sk.bake(Method::kDqs, poses, o);
+    int capped = 0;
+    for (std::size_t f = 0; f < poses.size(); ++f) {
+      INFO("cap " << cap << " frame " << f);
+      // One tracker call per sub-step; one projection per frame.
+      CHECK(trk.stats[f].tracker_calls == expected[f]);
+      CHECK(trk.stats[f].tracker_calls == trk.stats[f].substeps);
+      CHECK(imp.stats[f].tracker_calls == 1);
+      CHECK(dqs.stats[f].tracker_calls == 0);
+      CHECK(trk.stats[f].capped_calls <= trk.stats[f].tracker_calls);
+      capped += trk.stats[f].capped_calls + imp.stats[f].capped_calls;
+      if (cap == 1 && f > 0) {
+        // One iteration cannot settle a moving joint: every tracker call of a moving frame is
+        // capped, and every projection of a bent pose (DQS gives the rest mesh back at frame 4).
+        CHECK(trk.stats[f].capped_calls == trk.stats[f].tracker_calls);
+        CHECK(imp.stats[f].capped_calls == (f + 1 < poses.size() ? 1 : 0));
+      }
+    }
+    if (cap == 1) CHECK(capped > 0);
+    if (cap == 0) {
+      // The report: the mesh is closed (one component); the call counts per frame, null for dqs.
+      const auto j = nlohmann::json::parse(metrics_json(sk.rig(), {dqs, trk}, {}));
+      CHECK(j["closed"] == true);
+      CHECK(j["components"].size() == 1);
+      CHECK(j["methods"]["tracking2014"]["frames"][1]["tracker_calls"] == expected[1]);
+      CHECK(j["methods"]["tracking2014"]["worst"]["tracker_calls"] ==
+            *std::max_element(expected.begin(), expected.end()));
+      CHECK(j["methods"]["dqs"]["frames"][1]["tracker_calls"].is_null());
+      CHECK(j["methods"]["dqs"]["capped_share"].is_null());
+      CHECK(j["methods"]["dqs"]["frames"][2]["self_intersections_new"].is_null());  // not computed
+    }
+  }
+}
+
+TEST_CASE("pipeline: an open mesh is reported not closed and has no volume", "[skinning][pipeline]") {
+  Rig rig = testing::capsule_rig();
+  const int segments = 24;  // the capsule's last triangles are the top cap's fan
+  rig.triangles.conservativeResize(rig.triangles.rows() - segments, 3);
+  Skinner sk(rig, fast_setup());
+  const auto poses = bend_animation(sk.rig(), {parse_bend("Bone1:z:90", sk.rig())}, 3);
+  const BakeResult dqs = sk.bake(Method::kDqs, poses);
+  for (const FrameStats& s : dqs.stats) {
+    CHECK(std::isnan(s.metrics.volume_ratio));
+    CHECK(s.metrics.self_intersections_new >= 0);  // the other metrics are still computed
+  }
+  const auto j = nlohmann::json::parse(metrics_json(sk.rig(), {dqs}, {}));
+  CHECK(j["closed"] == false);
+  REQUIRE(j["components"].size() == 1);
+  CHECK(j["components"][0]["border_edges"] == segments);
+  CHECK(j["methods"]["dqs"]["worst"]["volume_ratio"].is_null());
 }
