@@ -524,7 +524,8 @@ Positions with_rows(const Positions& whole, Eigen::Index first, const Positions&
 
 }  // namespace
 
-TEST_CASE("closed meshes: open borders, non-manifold and misoriented edges, components", "[skinning][metrics]") {
+TEST_CASE("closed meshes: open borders, non-manifold and misoriented edges, components",
+          "[skinning][metrics]") {
   const Mesh sphere = icosphere(2);
   const MeshClosure whole = mesh_closure(sphere.f, sphere.v.rows());
   REQUIRE(whole.components.size() == 1);
@@ -627,7 +628,11 @@ TEST_CASE("self-intersections: new pairs exclude the rest pairs by identity", "[
   p3.middleRows(a.v.rows(), b.v.rows()).rowwise() += Eigen::RowVector3f(0.f, 0.f, 0.3f);
   SelfIntersectionDetails d3;
   const Mesh m3mesh{p3, rest.f};
-  si(m3mesh, &d3, [] { SelfIntersectionOptions o; o.max_pairs = 1 << 30; return o; }());
+  si(m3mesh, &d3, [] {
+    SelfIntersectionOptions o;
+    o.max_pairs = 1 << 30;
+    return o;
+  }());
   int expected = 0;
   for (const auto& p : d3.pairs)
     expected += std::find(eval.rest_pairs().begin(), eval.rest_pairs().end(), p) == eval.rest_pairs().end();

@@ -83,7 +83,8 @@ int root(std::vector<int>& parent, int v) {
 }
 
 /// Component of each triangle (joined through shared vertices), numbered by first triangle.
-std::vector<int> triangle_components(const track::Triangles& triangles, Eigen::Index num_vertices, int& count) {
+std::vector<int> triangle_components(const track::Triangles& triangles, Eigen::Index num_vertices,
+                                     int& count) {
   std::vector<int> parent(static_cast<std::size_t>(num_vertices));
   for (std::size_t v = 0; v < parent.size(); ++v) parent[v] = static_cast<int>(v);
   for (Eigen::Index f = 0; f < triangles.rows(); ++f)
@@ -107,7 +108,8 @@ void count_edge_defects(const track::Triangles& triangles, MeshClosure& out) {
     for (int c = 0; c < 3; ++c) {
       const int a = triangles(f, c), b = triangles(f, (c + 1) % 3);
       if (a == b) continue;
-      const auto lo = static_cast<std::uint64_t>(std::min(a, b)), hi = static_cast<std::uint64_t>(std::max(a, b));
+      const auto lo = static_cast<std::uint64_t>(std::min(a, b)),
+                 hi = static_cast<std::uint64_t>(std::max(a, b));
       uses.push_back({lo << 33 | hi << 1 | (a > b ? 1u : 0u), out.component[static_cast<std::size_t>(f)]});
     }
   std::sort(uses.begin(), uses.end());
@@ -130,7 +132,8 @@ track::Triangles closed_rows(const track::Triangles& triangles, const MeshClosur
     if (closure.components[static_cast<std::size_t>(closure.component[static_cast<std::size_t>(f)])].closed())
       rows.push_back(f);
   track::Triangles out(static_cast<Eigen::Index>(rows.size()), 3);
-  for (std::size_t i = 0; i < rows.size(); ++i) out.row(static_cast<Eigen::Index>(i)) = triangles.row(rows[i]);
+  for (std::size_t i = 0; i < rows.size(); ++i)
+    out.row(static_cast<Eigen::Index>(i)) = triangles.row(rows[i]);
   return out;
 }
 
@@ -141,8 +144,8 @@ bool MeshClosure::closed() const {
 }
 
 int MeshClosure::closed_components() const {
-  return static_cast<int>(std::count_if(components.begin(), components.end(),
-                                        [](const MeshComponent& c) { return c.closed(); }));
+  return static_cast<int>(
+      std::count_if(components.begin(), components.end(), [](const MeshComponent& c) { return c.closed(); }));
 }
 
 MeshClosure mesh_closure(const track::Triangles& triangles, Eigen::Index num_vertices) {

@@ -71,8 +71,8 @@ struct MeshComponent {
 
 /// The components of a mesh and which triangle belongs to which.
 struct MeshClosure {
-  std::vector<int> component;               ///< `#F`: component of each triangle
-  std::vector<MeshComponent> components;    ///< in order of their first triangle
+  std::vector<int> component;             ///< `#F`: component of each triangle
+  std::vector<MeshComponent> components;  ///< in order of their first triangle
   /// True when the mesh has triangles and every component is closed.
   bool closed() const;
   int closed_components() const;

@@ -19,13 +19,15 @@ struct ReportContext {
 };
 
 /// The metrics JSON: `{rig, vertices, triangles, joints, animation, fps, threads, fit_seconds,
-/// methods: {name: {mean_ms, ratio_to_dqs, vertex_iterations_per_second, rest_recovery, worst,
-/// frames: [...]}}}`. Values not computed are `null`.
+/// closed, components, methods: {name: {mean_ms, ratio_to_dqs, vertex_iterations_per_second,
+/// rest_recovery, tracker_calls, capped_calls, capped_share, worst, frames: [...]}}}`. Values not
+/// computed are `null` (docs/skinning-metrics.md, "The metrics JSON").
 std::string metrics_json(const Rig& rig, const std::vector<BakeResult>& results,
                          const ReportContext& context);
 
 /// One line per method: self-intersections, inverted triangles, iso residual, edge distortion,
-/// volume ratio, rest recovery, ms/frame, ratio to DQS (worst values over the animation).
+/// volume ratio, rest recovery (worst values over the animation), calls at cap (tracker calls
+/// stopped at the iteration cap / all calls), ms/frame, ratio to DQS.
 std::string comparison_table(const std::vector<BakeResult>& results);
 
 /// Writes `text` to `path` atomically (isokit::write_text_file_atomically), creating its folder
