@@ -18,6 +18,7 @@
 
 #include <Eigen/Geometry>
 
+#include "isokit/skinning/mesh_closure.h"
 #include "isokit/track/mesh.h"
 
 namespace isokit::skinning {
@@ -56,32 +57,6 @@ int count_self_intersections(const track::Positions& positions, const track::Tri
                              SelfIntersectionDetails* details = nullptr,
                              const SelfIntersectionOptions& options = {});
 
-/// One connected component of a triangle mesh (triangles joined through shared vertices) and its
-/// edges' defects. Edges of degenerate index triples (`a == b`) are ignored.
-struct MeshComponent {
-  int triangles{0};
-  int border_edges{0};        ///< edges used by one triangle (an open border)
-  int non_manifold_edges{0};  ///< edges used by three or more triangles
-  /// Edges of two triangles that traverse them the same way (inconsistent orientation).
-  int misoriented_edges{0};
-  /// A closed, consistently oriented surface: every edge used by exactly two triangles, once in
-  /// each direction (what `enclosed_volume` needs to be meaningful).
-  bool closed() const { return border_edges == 0 && non_manifold_edges == 0 && misoriented_edges == 0; }
-};
-
-/// The components of a mesh and which triangle belongs to which.
-struct MeshClosure {
-  std::vector<int> component;             ///< `#F`: component of each triangle
-  std::vector<MeshComponent> components;  ///< in order of their first triangle
-  /// True when the mesh has triangles and every component is closed.
-  bool closed() const;
-  int closed_components() const;
-};
-
-/// Connected components and their closedness.
-/// 	hrow InputError naming the triangle for an index outside `[0, num_vertices)`.
-MeshClosure mesh_closure(const track::Triangles& triangles, Eigen::Index num_vertices);
-
 /// Signed enclosed volume by the divergence theorem, `Σ_f (p0 · (p1 × p2)) / 6` with corners taken
 /// relative to the bounding-box centre, in double. Positive for a closed mesh with outward
 /// (counter-clockwise) triangles, negative when flipped; meaningful for closed meshes only.
@@ -113,14 +88,10 @@ struct FrameMetrics {
   static constexpr double kNotComputed = std::numeric_limits<double>::quiet_NaN();
 
   int self_intersections{-1};                 ///< `count_self_intersections`
-  /// Intersecting pairs of this frame that are not an intersecting pair of the rest mesh (pairs
-  /// of triangle indices compared, not counts subtracted).
-  int self_intersections_new{-1};
+  int self_intersections_new{-1};             ///< pairs that are not a rest pair (by identity, not by count)
   int degenerate_faces{-1};                   ///< `SelfIntersectionDetails::degenerate_count`
-  /// `enclosed_volume` of the closed components (`MeshClosure`), mesh units³; not computed
-  /// when no component is closed.
-  double volume{kNotComputed};
-  double volume_ratio{kNotComputed};          ///< volume / rest volume (closed components)
+  double volume{kNotComputed};                ///< `enclosed_volume` of the closed components, mesh units³
+  double volume_ratio{kNotComputed};          ///< volume / rest volume (NaN when no component is closed)
   double edge_distortion_mean{kNotComputed};  ///< `EdgeDistortion::mean` from rest, no unit
   double edge_distortion_max{kNotComputed};   ///< `EdgeDistortion::max` from rest, no unit
   double max_displacement{kNotComputed};      ///< from the rest positions, mesh units
@@ -152,8 +123,7 @@ class FrameMetricsEvaluator {
   FrameMetricsEvaluator(track::Positions rest, track::Triangles triangles,
                         SelfIntersectionOptions options = {});
 
-  /// All geometric fields; without `self_intersections` the exact pass (the slowest metric) is
-  /// skipped and the two self-intersection counts stay -1.
+  /// Without `self_intersections` the exact pass (the slowest) is skipped: both counts stay -1.
   /// \throw InputError if `posed` has a different vertex count from the rest mesh.
   FrameMetrics evaluate(const track::Positions& posed, bool self_intersections = true) const;
 
@@ -167,7 +137,7 @@ class FrameMetricsEvaluator {
  private:
   track::Positions rest_;
   track::Triangles triangles_;
-  track::Triangles closed_triangles_;  ///< the triangles of the closed components
+  track::Triangles closed_triangles_;  ///< of the closed components
   MeshClosure closure_;
   SelfIntersectionOptions options_;
   mutable std::once_flag rest_pairs_once_;
