@@ -34,7 +34,7 @@ enum class FitRule {
   hrbf_strict,  ///< its HRBF, second try (cosine > 0.3 kept)
   hrbf_open,    ///< its HRBF, third try (cosine > 0.3, no closure points)
   shared,       ///< no fit: its vertices share the primitive of `merged_into`
-  capsule,      ///< no HRBF fit and no neighbour to share with: a fitted capsule (fit_capsule)
+  capsule,      ///< no HRBF fit: a capsule that matches its part, or no touching neighbour to share with
   none,         ///< no fit and no fitted neighbour: its vertices have no field
 };
 const char* to_string(FitRule rule);
