@@ -10,6 +10,8 @@
 #include "isokit/core/error.h"
 #include "isokit/core/math.h"
 #include "isokit/implicit/fit.h"
+#include "isokit/implicit/fit_quality.h"
+#include "isokit/implicit/primitives.h"
 #include "test_util.h"
 
 using namespace isokit;
@@ -108,19 +110,22 @@ TEST_CASE("fitting a sampled sphere reproduces it", "[fit]") {
   CHECK(fp.local->eval_d(lc).value > 0.9);
 }
 
+namespace {
+
+/// A capsule of radius `R` around the segment (0,0,0)-(0,0,L), as a closed mesh.
+MeshPart capsule_part(double R, double L) {
+  std::vector<std::pair<double, double>> prof;
+  for (int i = 1; i < 8; ++i) prof.push_back({-R * std::cos(0.5 * kPi * i / 8), R * std::sin(0.5 * kPi * i / 8)});
+  for (int i = 0; i <= 10; ++i) prof.push_back({L * i / 10, R});
+  for (int i = 1; i < 8; ++i) prof.push_back({L + R * std::sin(0.5 * kPi * i / 8), R * std::cos(0.5 * kPi * i / 8)});
+  return revolve(prof, {0, 0, 0}, {0, 0, L}, 32, true, true, {0, 0, -R}, {0, 0, L + R});
+}
+
+}  // namespace
+
 TEST_CASE("fitting a capped cylinder reproduces it", "[fit]") {
   const double R = 0.4, L = 2.0;
-  std::vector<std::pair<double, double>> prof;
-  for (int i = 1; i < 8; ++i) {  // hemisphere at z = 0
-    const double th = 0.5 * kPi * i / 8;
-    prof.push_back({-R * std::cos(th), R * std::sin(th)});
-  }
-  for (int i = 0; i <= 10; ++i) prof.push_back({L * i / 10, R});
-  for (int i = 1; i < 8; ++i) {
-    const double th = 0.5 * kPi * i / 8;
-    prof.push_back({L + R * std::sin(th), R * std::cos(th)});
-  }
-  const MeshPart part = revolve(prof, {0, 0, 0}, {0, 0, L}, 32, true, true, {0, 0, -R}, {0, 0, L + R});
+  const MeshPart part = capsule_part(R, L);
   const FittedPart fp = fit_part(part);
   CHECK(fp.r == Approx(R).epsilon(0.02));
   test::Rng rng(22);
@@ -135,6 +140,57 @@ TEST_CASE("fitting a capped cylinder reproduces it", "[fit]") {
   }
   INFO("max distance of the 0.5 iso-surface to the capsule: " << worst / R << " R");
   CHECK(worst <= 0.08 * R);  // measured 0.061 R (seed 1, 50 samples; the caps are the worst)
+}
+
+TEST_CASE("fit distances both ways: small for a fitted capsule, large for a bad field", "[fit]") {
+  const double R = 0.4, L = 2.0;
+  const MeshPart part = capsule_part(R, L);
+  const FittedPart fp = fit_part(part);
+  SECTION("the fitted primitive: both ways within a lattice spacing") {
+    const FitDistances d = fit_distances(*fp.field(), fp.local_to_world, part.vertices, part.triangles);
+    INFO("vertex->surface max " << d.to_surface_max / R << " R, surface->vertex max " << d.from_surface_max / R
+                                << " R over " << d.surface_points << " points");
+    CHECK(d.vertices == int(part.vertices.size()));
+    CHECK(d.surface_points > 500);
+    CHECK(d.to_surface_p95 <= d.to_surface_max);
+    CHECK(d.to_surface_max <= 0.1 * R);
+    CHECK(d.from_surface_max <= 0.1 * R);
+  }
+  SECTION("the exact capsule field: the mesh's own facets are the only error") {
+    const CapsuleField exact({0, 0, 0}, {0, 0, float(L)}, float(R), float(R));
+    const FitDistances d = fit_distances(exact, Rigid3d{}, part.vertices, part.triangles);
+    CHECK(d.to_surface_max <= 0.02 * R);
+    CHECK(d.from_surface_max <= 0.03 * R);
+  }
+  SECTION("a field twice too wide: both ways about R") {
+    const CapsuleField wide({0, 0, 0}, {0, 0, float(L)}, float(2 * R), float(R));
+    const FitDistances d = fit_distances(wide, Rigid3d{}, part.vertices, part.triangles);
+    CHECK(d.to_surface_p95 >= 0.9 * R);
+    CHECK(d.from_surface_max >= 0.9 * R);
+  }
+  SECTION("a field over half the part: vertices -> surface large, surface -> vertices at most R (its cap)") {
+    const CapsuleField half({0, 0, 0}, {0, 0, float(L / 2)}, float(R), float(R));
+    const FitDistances d = fit_distances(half, Rigid3d{}, part.vertices, part.triangles);
+    CHECK(d.to_surface_max >= 0.9 * L / 2);
+    CHECK(d.from_surface_max <= 1.05 * R);
+  }
+  SECTION("excluded surface points are left out; no 0.5 level: infinite, not NaN") {
+    const CapsuleField exact({0, 0, 0}, {0, 0, float(L)}, float(R), float(R));
+    const FitDistances d = fit_distances(exact, Rigid3d{}, part.vertices, part.triangles,
+                                         [](const Vec3d& p) { return p.z > 1.0; });
+    CHECK(d.surface_points > 0);
+    const FitDistances all = fit_distances(exact, Rigid3d{}, part.vertices, part.triangles);
+    CHECK(d.surface_points < all.surface_points);
+    struct Dim final : Field {  // 0.25 on a box, nowhere 0.5
+      FieldSample eval(const Vec3f&) const override { return {0.25f, {}}; }
+      Box3f support() const override { return {{-1, -1, -1}, {1, 1, 3}}; }
+    };
+    const FitDistances none = fit_distances(Dim{}, Rigid3d{}, part.vertices, part.triangles);
+    CHECK(std::isinf(none.to_surface_max));
+    CHECK(none.from_surface_max == 0);
+    CHECK_THROWS_AS(fit_distances(exact, Rigid3d{}, part.vertices, part.triangles, {}, FitDistanceOptions{4, 10}),
+                    InputError);
+  }
 }
 
 TEST_CASE("a fitted limb part closes smoothly at its joint", "[fit]") {

@@ -14,6 +14,7 @@
 
 #include "isokit/core/error.h"
 #include "isokit/skinning/bake_job.h"
+#include "isokit/skinning/fit_quality.h"
 
 using namespace isokit::skinning;
 
@@ -55,29 +56,43 @@ void print_info(const Rig& rig, const std::string& spec) {
     std::printf("  %-24s %zu frames at %.1f fps\n", c.name.c_str(), c.local.size(), c.fps);
 }
 
-// `info --fit`: what the fit made of every joint.
+// `info --fit`: what the fit made of every joint: its vertices, the rule that gave them a field,
+// the fit distances both ways and the rest vertices of other joints inside its primitive
+// (docs/skinning.md, "Checking a fit").
 void print_fit(const FittedRig& fitted) {
   const Rig& rig = fitted.rig();
-  std::vector<PrimitiveCoverage> coverage(rig.joints.size());
-  for (const PrimitiveCoverage& c : primitive_coverage(fitted))
-    coverage[static_cast<std::size_t>(c.joint)] = c;
-  std::printf("primitives: %d of %zu joints (fit %.2f s)\n", fitted.fitted_count(), rig.joints.size(),
-              fitted.fit_seconds());
-  std::printf("  %-24s %8s %7s %8s  %s\n", "joint", "vertices", "r", "closures",
-              "inside at rest: related / unrelated");
+  const FitQuality q = fit_quality(fitted);
+  std::vector<const PartQuality*> part(rig.joints.size(), nullptr);
+  for (const PartQuality& p : q.parts) part[static_cast<std::size_t>(p.joint)] = &p;
+  std::printf("primitives: %d of %zu joints (fit %.2f s); vertices without a field: %d of %lld\n",
+              fitted.fitted_count(), rig.joints.size(), fitted.fit_seconds(), q.vertices_without_field,
+              static_cast<long long>(rig.rest.rows()));
+  std::printf("  %-24s %8s %-11s %8s %3s  %-15s %-15s %-11s %s\n", "joint", "vertices", "rule", "r", "cl",
+              "vert->surf p95", "surf->vert p95", "max / r", "inside: related / unrelated");
+  std::printf("  %-24s %8s %-11s %8s %3s  %-15s %-15s %-11s\n", "", "", "", "", "", "  / max (%diag)",
+              "  / max (%diag)", "  v->s s->v");
+  const double pct = q.diagonal > 0 ? 100.0 / q.diagonal : 0;
   for (const BonePart& b : fitted.bones()) {
     const char* name = rig.joints[static_cast<std::size_t>(b.joint)].name.c_str();
-    if (b.fitted) {
-      const PrimitiveCoverage& c = coverage[static_cast<std::size_t>(b.joint)];
-      std::printf("  %-24s %8d %7.3g %8d  %d / %d\n", name, b.vertices, b.fit.r, b.fit.closure_points,
-                  c.related, c.unrelated);
+    if (const PartQuality* p = part[static_cast<std::size_t>(b.joint)]) {
+      const isokit::implicit::FitDistances& d = p->distances;
+      std::printf("  %-24s %8d %-11s %8.3g %3d  %6.2f / %-6.2f %6.2f / %-6.2f %5.2f %5.2f  %d / %d\n", name,
+                  b.vertices, to_string(b.rule), b.fit.r, b.fit.closure_points, d.to_surface_p95 * pct,
+                  d.to_surface_max * pct, d.from_surface_p95 * pct, d.from_surface_max * pct,
+                  d.to_surface_max / p->r, d.from_surface_max / p->r, p->coverage.related, p->coverage.unrelated);
     } else {
-      std::printf("  %-24s no primitive: %s\n", name, b.error.c_str());
+      const std::string to = b.merged_into >= 0 ? " -> " + rig.joints[static_cast<std::size_t>(b.merged_into)].name : "";
+      std::printf("  %-24s %8d %-11s%s\n", name, b.vertices, to_string(b.rule), to.c_str());
+      if (b.rule != FitRule::no_vertices) std::printf("  %-24s   (%s)\n", "", b.error.c_str());
     }
   }
   std::printf(
-      "  (related: vertices of the primitives next to it in the tree; unrelated: of any other\n"
-      "   joint; many unrelated vertices mean a primitive reaching where it should not)\n");
+      "  worst part: vertex->surface p95 %.2f %%, max %.2f %%; surface->vertex p95 %.2f %%, max %.2f %% of the\n"
+      "  diagonal (%.4g); unrelated vertices inside primitives at rest: %d\n"
+      "  (cl: closure points; related: vertices of the primitives next to it in the tree; unrelated: of any\n"
+      "   other joint; many unrelated vertices mean a primitive reaching where it should not)\n",
+      100 * q.worst_to_surface_p95(), 100 * q.worst_to_surface_max(), 100 * q.worst_from_surface_p95(),
+      100 * q.worst_from_surface_max(), q.diagonal, q.unrelated_inside());
 }
 
 /// Everything the command line sets.

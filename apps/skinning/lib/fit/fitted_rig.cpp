@@ -9,9 +9,11 @@
 #include <map>
 #include <mutex>
 #include <numeric>
+#include <set>
 #include <utility>
 
 #include "isokit/core/error.h"
+#include "isokit/implicit/fit_quality.h"
 #include "isokit/implicit/skeleton.h"
 #include "isokit/operators/biharmonic.h"
 #include "isokit/operators/controller.h"
@@ -88,6 +90,11 @@ std::vector<int> clean_partition(const std::vector<int>& labels, const track::Tr
 
 namespace {
 
+/// A capsule "matches" a part whose HRBF failed when its vertex -> surface p95 is at most this
+/// fraction of its radius (docs/skinning.md, "No vertex without a field": the humanoid's toe
+/// 0.43, its shoulders' open band 0.75).
+constexpr double kCapsuleMatch = 0.5;
+
 /// The partition seen per joint (recomputed at each pass, after failed fits are merged).
 struct JointParts {
   const Rig& rig;
@@ -129,20 +136,29 @@ JointParts joint_parts(const Rig& r, const std::vector<Eigen::Vector3d>& jp,
 }
 
 /// Step 3, second pass (docs/skinning.md "Pipeline", 3): the vertices of every joint whose fit
-/// failed go to a fitted neighbour (the parent, else the child with most vertices), which is
-/// marked in `refit`. \return false when no vertex moved (nothing to refit).
+/// failed go to a fitted neighbour whose part touches its part (the parent, else the child with
+/// most vertices), which is marked in `refit`. \return false when no vertex moved (nothing to refit).
 bool merge_failed_fits(const Rig& r, std::vector<BonePart>& bones, std::vector<int>& partition,
                        std::vector<char>& refit) {
   const int nv = static_cast<int>(r.rest.rows());
   const int nj = static_cast<int>(r.joints.size());
+  // Joints whose parts share a triangle: a separate piece (a sword, a rigid part) shares no
+  // neighbour's primitive; the capsule fallback covers it.
+  std::set<std::pair<int, int>> touching;
+  for (Eigen::Index f = 0; f < r.triangles.rows(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const int a = partition[r.triangles(f, k)], b = partition[r.triangles(f, (k + 1) % 3)];
+      if (a != b) touching.insert({std::min(a, b), std::max(a, b)});
+    }
+  auto can_take = [&](int t, int j) { return bones[t].fitted && touching.count({std::min(t, j), std::max(t, j)}) > 0; };
   std::vector<int> target(static_cast<std::size_t>(nj), -1);
   for (int j = 0; j < nj; ++j) {
     if (bones[j].fitted || bones[j].vertices == 0) continue;
     int t = r.joints[j].parent;
-    if (t < 0 || !bones[t].fitted) {
+    if (t < 0 || !can_take(t, j)) {
       t = -1;
       for (int c = 0; c < nj; ++c)
-        if (r.joints[c].parent == j && bones[c].fitted && (t < 0 || bones[c].vertices > bones[t].vertices))
+        if (r.joints[c].parent == j && can_take(c, j) && (t < 0 || bones[c].vertices > bones[t].vertices))
           t = c;
     }
     if (t < 0) continue;
@@ -160,6 +176,7 @@ bool merge_failed_fits(const Rig& r, std::vector<BonePart>& bones, std::vector<i
     if (target[j] >= 0) {
       bones[j].vertices = 0;
       bones[j].merged_into = target[j];
+      bones[j].rule = FitRule::shared;
       bones[j].error += " (its vertices were merged into '" + r.joints[target[j]].name + "')";
     }
   return true;
@@ -325,6 +342,7 @@ void fit_with_retries(implicit::MeshPart& part, const implicit::PartFitOptions& 
       b.fit = implicit::fit_part(part, oa);
       b.fitted = true;
       b.error.clear();
+      b.rule = attempt == 0 ? FitRule::hrbf : attempt == 1 ? FitRule::hrbf_strict : FitRule::hrbf_open;
     } catch (const InputError& e) {
       if (attempt == 0) b.error = e.what();
     }
@@ -339,6 +357,7 @@ bool fit_joint(const JointParts& parts, const SkinSetup& setup, int j, bool refi
   b.error.clear();
   b.joint = j;
   b.vertices = parts.count[j];
+  b.rule = parts.count[j] == 0 ? FitRule::no_vertices : FitRule::none;
   const std::string name = r.name + ": joint '" + r.joints[j].name + "'";
   if (parts.count[j] == 0) {
     b.error = "no vertices";
@@ -355,6 +374,52 @@ bool fit_joint(const JointParts& parts, const SkinSetup& setup, int j, bool refi
   b.end = seg1;
   fit_with_retries(part, o, seg0, seg1, b);
   return true;
+}
+
+/// Step 3 (docs/skinning.md, "No vertex without a field"): a capsule fitted to joint `j`'s part
+/// (libimplicit `fit_capsule`), kept when `max_p95_over_r` is 0 or when its vertex → surface p95
+/// is at most `max_p95_over_r` times its radius. \return whether `b` took it.
+bool fit_fallback(const JointParts& parts, const SkinSetup& setup, int j, double max_p95_over_r, BonePart& b) {
+  const Rig& r = parts.rig;
+  implicit::MeshPart part = part_mesh(parts, j, r.name + ": joint '" + r.joints[j].name + "'");
+  if (part.vertices.empty())
+    for (int v = 0; v < static_cast<int>(r.rest.rows()); ++v)
+      if (parts.partition[v] == j) part.vertices.push_back({r.rest(v, 0), r.rest(v, 1), r.rest(v, 2)});
+  implicit::PartFitOptions o = setup.fit;
+  const auto [seg0, seg1] = place_bone_segment(parts, j, false, part, o);
+  implicit::FittedPart fit;
+  try {
+    fit = implicit::fit_capsule(part, o);
+  } catch (const InputError& e) {
+    if (max_p95_over_r == 0) b.error += "; capsule fallback: " + std::string(e.what());
+    return false;
+  }
+  if (max_p95_over_r > 0 &&
+      !(implicit::fit_distances(*fit.field(), fit.local_to_world, part.vertices, part.triangles).to_surface_p95 <=
+        max_p95_over_r * fit.r))
+    return false;
+  b.fit = fit;
+  b.start = seg0;
+  b.end = seg1;
+  b.fitted = true;
+  b.rule = FitRule::capsule;
+  return true;
+}
+
+/// A merge target whose refit failed (pass 1) keeps its first primitive, and the joints merged
+/// into it get their vertices back (the fallback then covers them).
+void undo_failed_merges(const std::vector<BonePart>& first, const std::vector<int>& first_partition,
+                        std::vector<BonePart>& bones, std::vector<int>& partition) {
+  const std::size_t nj = bones.size();
+  std::vector<char> undo(nj, 0);
+  for (std::size_t t = 0; t < nj; ++t) undo[t] = !bones[t].fitted && first[t].fitted;
+  for (std::size_t j = 0; j < nj; ++j) {
+    const int t = bones[j].merged_into;
+    if (t >= 0 && undo[static_cast<std::size_t>(t)]) bones[j] = first[j];
+    if (undo[j]) bones[j] = first[j];
+  }
+  for (std::size_t v = 0; v < partition.size(); ++v)
+    if (undo[static_cast<std::size_t>(partition[v])]) partition[v] = first_partition[v];
 }
 
 }  // namespace
@@ -375,15 +440,31 @@ FittedRig::FittedRig(const Rig& rig, const SkinSetup& setup, const Progress& pro
   // Pass 0 fits every joint; pass 1 merges the vertices of joints whose fit failed into a
   // fitted neighbour (the parent, else the child with most vertices) and refits those
   // neighbours with a segment covering all their vertices.
+  // A target whose refit fails keeps its first primitive and gives the merged vertices back;
+  // joints with vertices still without a primitive get a fitted capsule.
+  std::vector<BonePart> first;
+  std::vector<int> first_partition;
   for (int pass = 0; pass < 2; ++pass) {
-    if (pass == 1 && !merge_failed_fits(r, bones_, partition_, refit)) break;
+    if (pass == 1) {
+      // A failed part that a capsule matches (vertex -> surface p95 <= kCapsuleMatch r) keeps
+      // its own joint's motion; the others share a touching neighbour's primitive.
+      const JointParts parts = joint_parts(r, jp, partition_);
+      for (int j = 0; j < nj; ++j)
+        if (!bones_[j].fitted && parts.count[j] > 0) fit_fallback(parts, setup, j, kCapsuleMatch, bones_[j]);
+      if (!merge_failed_fits(r, bones_, partition_, refit)) break;
+    }
     const JointParts parts = joint_parts(r, jp, partition_);
     int done = 0;
     for (int j = 0; j < nj; ++j) {
       if (pass == 1 && !refit[j]) continue;
       if (fit_joint(parts, setup, j, refit[j] != 0, bones_[j]) && progress) progress("fit", ++done, nj);
     }
+    if (pass == 0) first = bones_, first_partition = partition_;
   }
+  undo_failed_merges(first, first_partition, bones_, partition_);
+  const JointParts parts = joint_parts(r, jp, partition_);
+  for (int j = 0; j < nj; ++j)
+    if (!bones_[j].fitted && parts.count[j] > 0) fit_fallback(parts, setup, j, 0, bones_[j]);
   fit_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   require(
       fitted_count() > 0, r.name,
@@ -462,6 +543,19 @@ std::vector<PrimitiveCoverage> primitive_coverage(const FittedRig& fitted) {
     out.push_back(c);
   }
   return out;
+}
+
+const char* to_string(FitRule rule) {
+  switch (rule) {
+    case FitRule::no_vertices: return "no vertices";
+    case FitRule::hrbf: return "hrbf";
+    case FitRule::hrbf_strict: return "hrbf strict";
+    case FitRule::hrbf_open: return "hrbf open";
+    case FitRule::shared: return "shared";
+    case FitRule::capsule: return "capsule";
+    case FitRule::none: return "none";
+  }
+  return "?";
 }
 
 int FittedRig::primitive_parent(int joint) const {

@@ -87,6 +87,17 @@ Rigid3d bone_frame(const Vec3d& a, const Vec3d& b);
 /// samples' normals point towards the bone on average), or a failed HRBF fit.
 FittedPart fit_part(const MeshPart& part, const PartFitOptions& options = {});
 
+/// Fallback primitive for a part whose HRBF cannot be bounded (docs/skinning.md, "No vertex
+/// without a field"; not in the papers): a capsule field (`t_r` of the distance to a segment
+/// minus a radius, `r` = the radius: 1 on the segment) sampled into a `grid_resolution`³ grid
+/// (always, whatever `sample_grid` says; `local` stays null). Two capsules are tried, one on the
+/// bone segment and one on the vertices' principal axis (through their centroid, spanning their
+/// extent less the radius at each end), each with the median distance of the vertices to its
+/// segment as radius; the one with the smaller vertex → surface plus surface → vertices p95
+/// (fit_quality.h) is kept. \throw InputError naming `part.name`: empty part, non-finite
+/// vertices, all vertices on one point.
+FittedPart fit_capsule(const MeshPart& part, const PartFitOptions& options = {});
+
 /// Fits every part; a part that throws is reported in `errors` (same index, empty when it
 /// fitted) and its result is left empty, so the rest of a rig still fits.
 std::vector<FittedPart> fit_parts(const std::vector<MeshPart>& parts, const PartFitOptions& options,

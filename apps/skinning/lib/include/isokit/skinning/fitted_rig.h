@@ -27,6 +27,18 @@ namespace isokit::skinning {
 /// Progress of long work: `(stage, done, total)`.
 using Progress = std::function<void(const std::string&, int, int)>;
 
+/// Which rule gave a joint's vertices a field (docs/skinning.md, "No vertex without a field").
+enum class FitRule {
+  no_vertices,  ///< no vertex in its partition: nothing to cover
+  hrbf,         ///< its HRBF, first try (triangles facing the bone with cosine < −0.2 dropped)
+  hrbf_strict,  ///< its HRBF, second try (cosine > 0.3 kept)
+  hrbf_open,    ///< its HRBF, third try (cosine > 0.3, no closure points)
+  shared,       ///< no fit: its vertices share the primitive of `merged_into`
+  capsule,      ///< no HRBF fit: a capsule that matches its part, or no touching neighbour to share with
+  none,         ///< no fit and no fitted neighbour: its vertices have no field
+};
+const char* to_string(FitRule rule);
+
 /// One joint's primitive.
 struct BonePart {
   int joint{-1};
@@ -36,6 +48,7 @@ struct BonePart {
   bool fitted{false};
   std::string error;         ///< why the joint has no primitive (no vertices, failed fit)
   int merged_into{-1};       ///< the joint that took this joint's vertices after a failed fit
+  FitRule rule{FitRule::none};  ///< the rule applied (a refitted merge target keeps its own try's)
   implicit::FittedPart fit;  ///< valid when `fitted`
 };
 
