@@ -74,10 +74,22 @@ endif()
 foreach(args "bake;procedural:cylinder;--bend;Elbow:x:90;--out;${OUT}/bad.glb"
              "bake;procedural:nothing;--bend;Bone1:x:90;--out;${OUT}/bad.glb"
              "bake;${OUT}/missing.glb;--bend;0:x:90;--out;${OUT}/bad.glb"
-             "bake;procedural:cylinder;--bend;Bone1:x:90;--method;magic;--out;${OUT}/bad.glb")
+             "bake;procedural:cylinder;--bend;Bone1:x:90;--method;magic;--out;${OUT}/bad.glb"
+             "bake;procedural:cylinder;--bend;Bone1:x:90;--max-step-rad;-1;--out;${OUT}/bad.glb"
+             "bake;procedural:cylinder;--bend;Bone1:x:90;--max-step-rad;abc;--out;${OUT}/bad.glb"
+             "bake;procedural:cylinder;--bend;Bone1:x:90;--fps;0;--out;${OUT}/bad.glb"
+             "bake;procedural:cylinder;--bend;Bone1:x:90;--frames;2;--out;${OUT}/bad.glb"
+             "bake;procedural:cylinder;--out;${OUT}/bad.glb"
+             "demo;--out;${OUT}/bad;--vertices;-5")
   execute_process(COMMAND "${EXE}" ${args} RESULT_VARIABLE rc OUTPUT_VARIABLE o ERROR_VARIABLE e)
   if(NOT rc EQUAL 2 OR NOT e MATCHES "error")
     message(FATAL_ERROR "isokit-skin ${args}: expected exit 2 with an error message, got ${rc}:\n${e}")
+  endif()
+  # One line: the message after the progress lines has no line break of its own.
+  string(REGEX REPLACE "^.*error: " "" last "${e}")
+  string(STRIP "${last}" last)
+  if(last MATCHES "\n")
+    message(FATAL_ERROR "isokit-skin ${args}: the error is not one line:\n${e}")
   endif()
   if(EXISTS "${OUT}/bad.glb")
     message(FATAL_ERROR "isokit-skin ${args} wrote an output despite the error")

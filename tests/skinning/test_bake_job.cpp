@@ -12,14 +12,19 @@
 using namespace isokit::skinning;
 namespace fs = std::filesystem;
 
-TEST_CASE("bake job: an animation request names exactly one source", "[skinning][bake_job]") {
+TEST_CASE("bake job: an animation request names at most one source", "[skinning][bake_job]") {
   const Rig r = testing::capsule_rig(8, 8, 2);
   AnimationRequest none;
-  CHECK_THROWS_AS(check_animation_request(none), isokit::InputError);
+  CHECK_NOTHROW(check_animation_request(none));
+  CHECK_THROWS_WITH(make_animation(r, none), Catch::Contains("has no clip") && Catch::Contains("--bend"));
   AnimationRequest two;
   two.clip = "walk";
   two.bends = {"Bone1:z:90"};
-  CHECK_THROWS_WITH(make_animation(r, two), Catch::Contains("exactly one of --clip, --bend or --pose-script"));
+  CHECK_THROWS_WITH(make_animation(r, two),
+                    Catch::Contains("at most one of --clip, --bend or --pose-script"));
+  AnimationRequest few = none;
+  few.frames = 2;
+  CHECK_THROWS_WITH(check_animation_request(few), Catch::Contains("--frames") && Catch::Contains("got 2"));
   AnimationRequest bend;
   bend.bends = {"Bone1:z:90"};
   bend.frames = 5;
@@ -31,6 +36,19 @@ TEST_CASE("bake job: an animation request names exactly one source", "[skinning]
   AnimationRequest clip;
   clip.clip = "no such clip";
   CHECK_THROWS_AS(make_animation(r, clip), isokit::InputError);
+}
+
+TEST_CASE("bake job: no animation option plays the rig's only clip; several are listed",
+          "[skinning][bake_job]") {
+  Rig r = testing::with_turn_clip(testing::capsule_rig(8, 8, 2), 4, 0.2);
+  const Animation a = make_animation(r, AnimationRequest{});
+  CHECK(a.poses.size() == 4);
+  CHECK(a.description == "clip animation_0");
+  r.clips.push_back(r.clips[0]);
+  r.clips[1].name = "walk";
+  CHECK_THROWS_WITH(make_animation(r, AnimationRequest{}), Catch::Contains("2 clips") &&
+                                                               Catch::Contains("animation_0, walk") &&
+                                                               Catch::Contains("--clip"));
 }
 
 TEST_CASE("bake job: the peak frame is the pose rotated farthest from the first", "[skinning][bake_job]") {

@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: MIT
 // isokit-skin: implicit skinning of rigged characters from the command line.
 //   isokit-skin info RIG [--fit [--setup S.json]]
-//   isokit-skin bake RIG --method M [--clip NAME | --bend J:AXIS:DEG ... | --pose-script P.json]
+//   isokit-skin bake RIG --method M [--clip NAME [--clip-file F] | --bend J:AXIS:DEG ... |
+//                    --pose-script P.json] (none: the rig's only clip)
 //                    [--frames N] [--fps N] [--max-step-rad R] [--setup S.json] --out OUT.glb
 //                    [--metrics M.json] [--render DIR] [--ply DIR]
 //   isokit-skin demo [--out DIR] [--vertices N] [--frames N] [--max-step-rad R]
@@ -9,14 +10,20 @@
 // procedural:humanoid?vertices=13000.
 #include <CLI/CLI.hpp>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <thread>
 
 #include "isokit/core/error.h"
+#include "isokit/core/math.h"
 #include "isokit/skinning/bake_job.h"
 #include "isokit/skinning/fit_quality.h"
+#include "isokit/skinning/procedural.h"
 
 using namespace isokit::skinning;
+using isokit::format_number;
+using isokit::kPi;
+using isokit::require;
 
 namespace {
 
@@ -30,6 +37,18 @@ Progress stderr_progress() {
     std::fprintf(stderr, "  %-28s %3d%% (%d/%d)\n", stage.c_str(), 100 * done / total, done, total);
     std::fflush(stderr);
   };
+}
+
+// Separate parts, open borders, non-manifold and inconsistently oriented edges: reported, never
+// refused.
+void print_surface(const Rig& rig) {
+  const SurfaceReport s = inspect_surface(rig.rest, rig.triangles);
+  const bool closed = s.boundary_edges == 0 && s.nonmanifold_edges == 0;
+  std::printf(
+      "surface: %d separate part(s), %d open border edge(s), %d non-manifold edge(s), %d non-manifold "
+      "vertex(es), %d edge(s) with inconsistent orientation; %s\n",
+      s.components, s.boundary_edges, s.nonmanifold_edges, s.nonmanifold_vertices, s.inconsistent_edges,
+      closed ? (s.volume >= 0 ? "closed, oriented outward" : "closed, inside out") : "not closed");
 }
 
 void print_info(const Rig& rig, const std::string& spec) {
@@ -46,11 +65,15 @@ void print_info(const Rig& rig, const std::string& spec) {
   }
   if (rig.rest.rows() > 0) mean_w /= double(rig.rest.rows());
   std::printf("weights per vertex: mean %.2f, max %d\n", mean_w, max_w);
+  print_surface(rig);
   std::printf("joints: %zu\n", rig.joints.size());
   const std::vector<Eigen::Vector3d> p = rest_joint_positions(rig);
-  for (std::size_t j = 0; j < rig.joints.size(); ++j)
-    std::printf("  %3zu %-24s parent %3d  at (%.3f, %.3f, %.3f)\n", j, rig.joints[j].name.c_str(),
-                rig.joints[j].parent, p[j].x(), p[j].y(), p[j].z());
+  for (std::size_t j = 0; j < rig.joints.size(); ++j) {
+    const Joint& jt = rig.joints[j];
+    const std::string note = jt.file_name.empty() ? "" : "  (named '" + jt.file_name + "' in the file)";
+    std::printf("  %3zu %-24s parent %3d  at (%.3f, %.3f, %.3f)%s\n", j, jt.name.c_str(), jt.parent, p[j].x(),
+                p[j].y(), p[j].z(), note.c_str());
+  }
   std::printf("clips: %zu\n", rig.clips.size());
   for (const Clip& c : rig.clips)
     std::printf("  %-24s %zu frames at %.1f fps\n", c.name.c_str(), c.local.size(), c.fps);
@@ -128,10 +151,15 @@ CLI::App* add_info(CLI::App& app, Args& a) {
 }
 
 CLI::App* add_bake(CLI::App& app, Args& a) {
-  auto* bake = app.add_subcommand("bake", "Deform a rig over an animation with one method and write the result");
+  auto* bake =
+      app.add_subcommand("bake", "Deform a rig over an animation with one method and write the result");
   bake->add_option("RIG", a.rig, kRigHelp)->required();
   bake->add_option("--method", a.method, "lbs | dqs | implicit2013 | tracking2014")->capture_default_str();
-  bake->add_option("--clip", a.animation.clip, "animation clip of the file, by name");
+  bake->add_option("--clip", a.animation.clip,
+                   "animation clip of the file (or of --clip-file), by name; default: the only clip");
+  bake->add_option(
+      "--clip-file", a.animation.clip_file,
+      "animation file (skeleton + clips, no mesh needed) whose clip is retargeted by joint name");
   bake->add_option("--bend", a.animation.bends,
                    "JOINT:AXIS:DEGREES — bend a joint about x|y|z of its local frame and back");
   bake->add_option("--pose-script", a.animation.pose_script, "JSON pose script (docs/skinning.md)");
@@ -144,14 +172,16 @@ CLI::App* add_bake(CLI::App& app, Args& a) {
   bake->add_option("--metrics", a.outputs.metrics, "write the quality metrics (QUALITY.md) as JSON");
   bake->add_option("--render", a.outputs.render_dir, "write PNG renders (peak frame) into this folder");
   bake->add_option("--ply", a.outputs.ply_dir, "write one PLY per frame into this folder");
-  bake->add_flag("--compare", a.compare, "also run the other three methods (metrics and renders side by side)");
-  bake->add_flag("--no-self-intersections", a.no_self, "skip the exact self-intersection count (faster metrics)");
+  bake->add_flag("--compare", a.compare,
+                 "also run the other three methods (metrics and renders side by side)");
+  bake->add_flag("--no-self-intersections", a.no_self,
+                 "skip the exact self-intersection count (faster metrics)");
   return bake;
 }
 
 CLI::App* add_demo(CLI::App& app, Args& a) {
-  auto* demo =
-      app.add_subcommand("demo", "The procedural humanoid's elbow and knee bent to 150° and back, all methods");
+  auto* demo = app.add_subcommand(
+      "demo", "The procedural humanoid's elbow and knee bent to 150° and back, all methods");
   demo->add_option("--out", a.demo_out, "output folder")->capture_default_str();
   demo->add_option("--vertices", a.demo_vertices, "humanoid vertex count")->capture_default_str();
   demo->add_option("--frames", a.demo_frames, "frames (rest, 150°, rest)")->capture_default_str();
@@ -169,11 +199,37 @@ void make_demo(Args& a) {
   a.max_step = a.demo_max_step;
 }
 
+/// Each numeric option's valid range (CLI11 reads the numbers; the ranges are checked here so that
+/// every message has the same one-line form). --frames is checked with the animation request.
+void check_numbers(const Args& a) {
+  auto in_range = [](double x, double lo, double hi) { return std::isfinite(x) && x >= lo && x <= hi; };
+  require(in_range(a.fps, 1e-3, 1000), "--fps",
+          "must be in (0, 1000] frames per second (got " + format_number(a.fps) + ")",
+          "give a frame rate such as 30");
+  for (double step : {a.max_step, a.demo_max_step})
+    require(in_range(step, 0, kPi), "--max-step-rad",
+            "must be 0 (the 2014 rule only) or in (0, pi] radians (got " + format_number(step) + ")",
+            "give e.g. 0.05, or 0");
+  require(a.demo_vertices >= 3000 && a.demo_vertices <= 400000, "demo --vertices",
+          "must be in [3000, 400000] (got " + std::to_string(a.demo_vertices) + ")", "give e.g. 13000");
+  require(a.demo_frames >= 3 && a.demo_frames <= 100000, "demo --frames",
+          "must be in [3, 100000] (got " + std::to_string(a.demo_frames) + ")", "give e.g. 31");
+}
+
+/// The rig, its loader warnings printed on stderr.
+Rig open_and_warn(const Args& a, const Progress& progress) {
+  std::vector<std::string> warnings;
+  Rig rig = open_rig(a.rig, a.fps, progress, &warnings);
+  for (const std::string& w : warnings) std::fprintf(stderr, "  warning: %s\n", w.c_str());
+  return rig;
+}
+
 int run_info(const Args& a, const Progress& progress) {
-  Rig rig = open_rig(a.rig, a.fps, progress);
+  Rig rig = open_and_warn(a, progress);
   print_info(rig, a.rig);
   if (a.info_fit) {
-    const Skinner skinner(std::move(rig), a.info_setup.empty() ? SkinSetup{} : load_setup(a.info_setup), progress);
+    const Skinner skinner(std::move(rig), a.info_setup.empty() ? SkinSetup{} : load_setup(a.info_setup),
+                          progress);
     print_fit(skinner.fitted());
   }
   return 0;
@@ -186,15 +242,18 @@ int run_bake(const Args& a, const std::vector<Method>& methods, Method main, con
   if (a.max_step > 0) setup.substeps.max_step_rad = a.max_step;
   std::fprintf(stderr, "isokit-skin: loading %s\n", a.rig.c_str());
   const auto t0 = std::chrono::steady_clock::now();
-  const Rig rig = open_rig(a.rig, a.fps, progress);
-  const Animation animation = make_animation(rig, a.animation, setup.substeps.max_step_rad);
-  std::fprintf(stderr, "isokit-skin: %lld vertices, %zu joints; fitting\n", static_cast<long long>(rig.rest.rows()),
-               rig.joints.size());
+  const Rig rig = open_and_warn(a, progress);
+  AnimationRequest request = a.animation;
+  request.fps = a.fps;
+  const Animation animation = make_animation(rig, request, setup.substeps.max_step_rad);
+  for (const std::string& w : animation.warnings) std::fprintf(stderr, "  warning: %s\n", w.c_str());
+  std::fprintf(stderr, "isokit-skin: %lld vertices, %zu joints; fitting\n",
+               static_cast<long long>(rig.rest.rows()), rig.joints.size());
   Skinner skinner(rig, setup, progress);
   for (const std::string& w : fit_warnings(skinner.fitted(), setup))
     std::fprintf(stderr, "  warning: %s\n", w.c_str());
-  std::fprintf(stderr, "isokit-skin: %d primitives fitted in %.2f s (setup %.2f s)\n", skinner.fitted().fitted_count(),
-               skinner.fitted().fit_seconds(),
+  std::fprintf(stderr, "isokit-skin: %d primitives fitted in %.2f s (setup %.2f s)\n",
+               skinner.fitted().fitted_count(), skinner.fitted().fit_seconds(),
                std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
   BakeOptions bo;
   bo.self_intersections = !a.no_self;
@@ -202,7 +261,8 @@ int run_bake(const Args& a, const std::vector<Method>& methods, Method main, con
   for (Method m : methods) {
     results.push_back(skinner.bake(m, animation.poses, bo));
     const BakeResult& r = results.back();
-    std::fprintf(stderr, "  %-13s %.2f ms/frame, worst: %d self-intersections, %d inverted triangles (%d new)\n",
+    std::fprintf(stderr,
+                 "  %-13s %.2f ms/frame, worst: %d self-intersections, %d inverted triangles (%d new)\n",
                  to_string(m), r.mean_ms, r.worst.self_intersections, r.worst.inverted_triangles,
                  r.worst.new_inverted_triangles);
   }
@@ -215,8 +275,9 @@ int run_bake(const Args& a, const std::vector<Method>& methods, Method main, con
                        peak_frame(animation.poses), written);
   for (const std::string& w : write_bake_outputs(rig, results, written, ctx, views, a.outputs))
     std::fprintf(stderr, "  wrote %s\n", w.c_str());
-  std::printf("%s — %s, %lld vertices, %zu joints, %d threads\n\n", rig.name.c_str(), animation.description.c_str(),
-              static_cast<long long>(rig.rest.rows()), rig.joints.size(), ctx.threads);
+  std::printf("%s — %s, %lld vertices, %zu joints, %d threads\n\n", rig.name.c_str(),
+              animation.description.c_str(), static_cast<long long>(rig.rest.rows()), rig.joints.size(),
+              ctx.threads);
   std::printf("%s", comparison_table(results).c_str());
   return 0;
 }
@@ -230,8 +291,18 @@ int main(int argc, char** argv) {
   const CLI::App* info = add_info(app, a);
   add_bake(app, a);
   const CLI::App* demo = add_demo(app, a);
-  CLI11_PARSE(app, argc, argv);
   try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    std::fprintf(stderr, "isokit-skin: error: %s (see isokit-skin --help)\n", e.what());
+    return 2;
+  }
+  try {
+    check_numbers(a);
     const Progress progress = stderr_progress();
     if (*info) return run_info(a, progress);
     if (*demo) {

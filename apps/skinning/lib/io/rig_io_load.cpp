@@ -21,6 +21,7 @@
 #include "io/gltf_io.h"
 #include "isokit/core/atomic_file.h"
 #include "isokit/core/error.h"
+#include "isokit/skinning/procedural.h"
 #include "isokit/skinning/rig_io.h"
 
 namespace isokit::skinning {
@@ -82,6 +83,10 @@ std::string quote(const std::string& s) {
 
 struct GltfInfo {
   std::vector<std::string> skin_joint_names;  ///< assimp's names of the skins' joint nodes
+  /// Per node: a unique name (the file's name; `NAME#k` for the k-th node sharing it).
+  std::vector<std::string> node_names;
+  /// Unique name -> the file's name, for the nodes renamed (empty: every name is unique).
+  std::map<std::string, std::string> file_names;
   /// A self-contained copy to give assimp instead of the file (empty: read the file itself).
   std::string patched;
 };
@@ -89,8 +94,10 @@ struct GltfInfo {
 // assimp 5.2 crashes on a skin without inverseBindMatrices (optional in glTF: identities). Such
 // files are rewritten for assimp: identity matrices added, every buffer embedded as a data URI,
 // images, textures and material details dropped (the rig needs none of them).
-std::string patch_for_assimp(const gltf::Document& doc, LoadReport& report) {
+std::string patch_for_assimp(const gltf::Document& doc, const GltfInfo& info, LoadReport& report) {
   json j = doc.json;
+  if (!info.file_names.empty())
+    for (std::size_t n = 0; n < info.node_names.size(); ++n) j["nodes"][n]["name"] = info.node_names[n];
   if (!j.contains("buffers")) j["buffers"] = json::array();
   json& buffers = j["buffers"];
   for (std::size_t i = 0; i < doc.buffers.size(); ++i)
@@ -136,6 +143,24 @@ std::string gltf_node_name(const json& nodes, std::size_t i) {
   return "nodes[" + std::to_string(i) + "]";
 }
 
+/// Unique node names (glTF allows duplicates): the first node (in file order) keeps its name, the
+/// k-th node sharing it is `NAME#k` (k = 2, 3, ...; skipping names the file already uses).
+void unique_node_names(const json& nodes, GltfInfo& info) {
+  std::set<std::string> taken;
+  for (std::size_t i = 0; i < nodes.size(); ++i) taken.insert(gltf_node_name(nodes, i));
+  std::map<std::string, int> seen;
+  for (std::size_t i = 0; i < nodes.size(); ++i) {
+    const std::string name = gltf_node_name(nodes, i);
+    std::string unique = name;
+    if (++seen[name] > 1) {
+      for (int k = seen[name]; taken.count(unique = name + "#" + std::to_string(k)) > 0;) ++k;
+      taken.insert(unique);
+      info.file_names[unique] = name;
+    }
+    info.node_names.push_back(unique);
+  }
+}
+
 /// Checks every skin's joint indices and inverse bind matrices; collects the joint names.
 void check_skins(const gltf::Document& doc, const std::string& path, const json& nodes, const json& skins,
                  GltfInfo& info) {
@@ -150,7 +175,7 @@ void check_skins(const gltf::Document& doc, const std::string& path, const json&
                       joints[k].get<std::size_t>() < nodes.size();
       require(ok, what + ".joints[" + std::to_string(k) + "]", "names a node that does not exist",
               "fix the file or export it again");
-      const std::string name = gltf_node_name(nodes, joints[k].get<std::size_t>());
+      const std::string name = info.node_names[joints[k].get<std::size_t>()];
       if (names.insert(name).second) info.skin_joint_names.push_back(name);
     }
     if (skins[s].contains("inverseBindMatrices")) {
@@ -236,13 +261,17 @@ GltfInfo check_gltf(const std::string& path, LoadReport& report) {
   const json& nodes = j.contains("nodes") && j["nodes"].is_array() ? j["nodes"] : empty;
   const json& skins = j.contains("skins") && j["skins"].is_array() ? j["skins"] : empty;
   const json& meshes = j.contains("meshes") && j["meshes"].is_array() ? j["meshes"] : empty;
+  unique_node_names(nodes, info);
   check_skins(doc, path, nodes, skins, info);
   check_skinned_nodes(doc, path, nodes, skins, meshes, report);
-  for (const json& skin : skins)
-    if (!skin.contains("inverseBindMatrices")) {
-      info.patched = patch_for_assimp(doc, report);
-      break;
-    }
+  bool patch = !info.file_names.empty();
+  for (const json& skin : skins) patch = patch || !skin.contains("inverseBindMatrices");
+  if (patch) info.patched = patch_for_assimp(doc, info, report);
+  if (!info.file_names.empty())
+    report.warnings.push_back(
+        std::to_string(info.file_names.size()) + " node(s) share a name with another (first " +
+        quote(info.file_names.begin()->second) + " -> " + quote(info.file_names.begin()->first) +
+        "); joints are selected by the unique name (docs/skinning-io.md)");
   return info;
 }
 
@@ -494,6 +523,7 @@ class Loader {
 
  private:
   int node_named(const std::string& name, const std::string& what) const;
+  Rig load_skeleton();
   void select_meshes();
   void bind_pose();
   void bind_pose_unskinned();
@@ -501,6 +531,7 @@ class Loader {
   void bind_mesh(MeshUse& m, std::map<int, std::string>& bind_source);
   void build_joints();
   void build_mesh();
+  void check_orientation();
   void append_mesh(const MeshUse& m, bool weights, FileMesh& file);
   std::vector<int> append_triangles(const MeshUse& m, FileMesh& file) const;
   void append_weights(const MeshUse& m, const std::vector<int>& local_to_out, FileMesh& file) const;
@@ -588,6 +619,24 @@ void Loader::select_meshes() {
     }
     meshes_.push_back(std::move(m));
   }
+}
+
+/// An animation-only file: the skeleton (its animated nodes and the nodes between them) at the
+/// file's node pose, and its clips; no mesh.
+Rig Loader::load_skeleton() {
+  std::set<std::string> animated;
+  for (unsigned a = 0; a < scene_->mNumAnimations; ++a)
+    for (unsigned c = 0; c < scene_->mAnimations[a]->mNumChannels; ++c)
+      animated.insert(scene_->mAnimations[a]->mChannels[c]->mNodeName.C_Str());
+  for (std::size_t i = 0; i < nodes_.list.size(); ++i)
+    if (animated.count(nodes_.list[i].name)) bind_world_[static_cast<int>(i)] = nodes_.list[i].world;
+  require(!bind_world_.empty(), path_, "has no animated node (no clip)",
+          "give a file with a skeleton and its animation");
+  build_joints();
+  build_clips();
+  require(!rig_.clips.empty(), path_, "has no animation that moves its skeleton",
+          "give a file with an animation (a clip of the skeleton)");
+  return std::move(rig_);
 }
 
 void Loader::bind_pose() {
@@ -720,6 +769,8 @@ void Loader::build_joints() {
       parent = node_joint_[static_cast<std::size_t>(p)];
     Joint joint;
     joint.name = nd.name;
+    const auto file_name = gltf_.file_names.find(nd.name);
+    if (file_name != gltf_.file_names.end()) joint.file_name = file_name->second;
     joint.parent = parent;
     Affine wb;
     const auto it = bind_world_.find(static_cast<int>(i));
@@ -751,6 +802,19 @@ void Loader::build_joints() {
         std::to_string(pose_differs) + " joint(s) (first " + quote(first_differs) +
         ") are posed away from the bind pose in the file; the rest pose is the bind pose, "
         "clips use the file's node transforms");
+}
+
+/// Reports (never refuses) faces whose orientation disagrees with a neighbour's, and a closed
+/// mesh that is inside out; separate parts, open borders and non-manifold edges are `info`'s.
+void Loader::check_orientation() {
+  const SurfaceReport s = inspect_surface(rig_.rest, rig_.triangles);
+  if (s.inconsistent_edges > 0)
+    report_.warnings.push_back(std::to_string(s.inconsistent_edges) +
+                               " edge(s) are traversed in the same direction by both their triangles: face "
+                               "orientation is not consistent (flip those faces in the DCC tool)");
+  else if (s.boundary_edges == 0 && s.nonmanifold_edges == 0 && s.volume < 0)
+    report_.warnings.push_back(
+        "the closed mesh is inside out (negative volume): flip its faces in the DCC tool");
 }
 
 void Loader::build_mesh() {
@@ -1089,13 +1153,15 @@ Rig Loader::load() {
   require(scene_ != nullptr && scene_->mRootNode != nullptr, path_,
           std::string("assimp cannot read it: ") + importer_.GetErrorString(),
           "check that it is a valid glTF 2.0, FBX or COLLADA file (export it again)");
-  require(!(scene_->mFlags & AI_SCENE_FLAGS_INCOMPLETE), path_, "assimp read an incomplete scene",
-          "export the file again with its meshes");
   nodes_ = collect_nodes(scene_, path_);
+  if (options_.skeleton_only) return load_skeleton();
+  require(!(scene_->mFlags & AI_SCENE_FLAGS_INCOMPLETE), path_, "assimp read an incomplete scene",
+          "export the file again with its meshes (or read it as a clip file: --clip-file)");
   select_meshes();
   bind_pose();
   build_joints();
   build_mesh();
+  check_orientation();
   build_clips();
   validate(rig_);
   return std::move(rig_);

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 #include "isokit/skinning/bake_job.h"
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 
@@ -33,13 +34,69 @@ std::string frame_ply_name(std::size_t frame) {
 }  // namespace
 
 void check_animation_request(const AnimationRequest& request) {
-  const int sources =
-      int(!request.clip.empty()) + int(!request.bends.empty()) + int(!request.pose_script.empty());
-  if (sources != 1) throw InputError("bake: give exactly one of --clip, --bend or --pose-script");
+  const int sources = int(!request.clip.empty() || !request.clip_file.empty()) + int(!request.bends.empty()) +
+                      int(!request.pose_script.empty());
+  if (sources > 1) throw InputError("bake: give at most one of --clip, --bend or --pose-script");
+  require(request.frames >= 3 && request.frames <= 100000, "bake: --frames",
+          "must be in [3, 100000] (got " + std::to_string(request.frames) + ")",
+          "give the number of frames of the bend (rest, peak, rest), e.g. 31");
 }
 
-Animation make_animation(const Rig& rig, const AnimationRequest& request, double max_step_rad) {
-  check_animation_request(request);
+namespace {
+
+std::string joined(const std::vector<std::string>& names) {
+  std::string list;
+  for (const std::string& n : names) list += (list.empty() ? "" : ", ") + n;
+  return list;
+}
+
+std::string default_clip(const Rig& rig) {
+  if (rig.clips.size() == 1) return rig.clips.front().name;
+  std::vector<std::string> names;
+  for (const Clip& c : rig.clips) names.push_back(c.name);
+  const std::string list = joined(names);
+  require(!rig.clips.empty(), "bake: " + rig.name, "has no clip to play",
+          "give --bend JOINT:AXIS:DEGREES or --pose-script P.json");
+  throw InputError("bake: " + rig.name + ": has " + std::to_string(rig.clips.size()) +
+                   " clips; choose one with --clip NAME (" + list + "), or give --bend or --pose-script");
+}
+
+// A clip of an animation file retargeted onto `rig`; the joints left unmatched as warnings.
+Animation clip_file_animation(const Rig& rig, const AnimationRequest& request) {
+  LoadOptions o;
+  o.fps = request.fps;
+  o.skeleton_only = true;
+  const Rig source = load_rig(request.clip_file, o);
+  const std::string name = request.clip.empty() ? default_clip(source) : request.clip;
+  const auto clip =
+      std::find_if(source.clips.begin(), source.clips.end(), [&](const Clip& c) { return c.name == name; });
+  std::vector<std::string> names;
+  for (const Clip& c : source.clips) names.push_back(c.name);
+  require(clip != source.clips.end(), request.clip_file + ": --clip " + name, "no clip of that name",
+          "choose one of: " + joined(names));
+  RetargetReport report;
+  Animation a;
+  a.poses = retarget_clip(source, *clip, rig, &report).local;
+  a.description = "clip " + name + " of " + request.clip_file + " (retargeted by joint name)";
+  if (!report.unmatched_target.empty())
+    a.warnings.push_back(std::to_string(report.unmatched_target.size()) +
+                         " joint(s) of the rig have no namesake in " + request.clip_file +
+                         " and stay rigid with their parent: " + joined(report.unmatched_target));
+  if (!report.unmatched_source.empty())
+    a.warnings.push_back(std::to_string(report.unmatched_source.size()) + " joint(s) of " +
+                         request.clip_file +
+                         " match no joint of the rig and are ignored: " + joined(report.unmatched_source));
+  return a;
+}
+
+}  // namespace
+
+Animation make_animation(const Rig& rig, const AnimationRequest& given, double max_step_rad) {
+  check_animation_request(given);
+  AnimationRequest request = given;
+  if (!request.clip_file.empty()) return clip_file_animation(rig, request);
+  if (request.clip.empty() && request.bends.empty() && request.pose_script.empty())
+    request.clip = default_clip(rig);
   Animation a;
   if (!request.bends.empty()) {
     for (const std::string& b : request.bends) a.bends.push_back(parse_bend(b, rig));
@@ -101,7 +158,8 @@ const BakeResult& main_result(const std::vector<BakeResult>& results, Method met
 
 std::vector<std::string> write_bake_outputs(const Rig& rig, const std::vector<BakeResult>& results,
                                             const BakeResult& main, const ReportContext& context,
-                                            const std::vector<RenderView>& views, const BakeOutputs& outputs) {
+                                            const std::vector<RenderView>& views,
+                                            const BakeOutputs& outputs) {
   std::vector<std::string> written;
   if (!outputs.glb.empty()) make_parent(outputs.glb);
   if (!outputs.metrics.empty()) make_parent(outputs.metrics);
@@ -116,7 +174,8 @@ std::vector<std::string> write_bake_outputs(const Rig& rig, const std::vector<Ba
   if (!outputs.render_dir.empty()) {
     const std::string& dir = outputs.render_dir;
     std::filesystem::create_directories(dir);
-    write_comparison_sheet(rig, results, views, rig.name + " — " + context.animation, dir + "/contact_sheet.png");
+    write_comparison_sheet(rig, results, views, rig.name + " — " + context.animation,
+                           dir + "/contact_sheet.png");
     for (const BakeResult& r : results)
       for (std::size_t k = 0; k < views.size(); ++k)
         write_frame_png(rig, r.frames.at(static_cast<std::size_t>(views[k].frame)), views[k],

@@ -75,7 +75,8 @@ std::vector<std::uint8_t> inverted_flags(const track::FieldFunction& f, const tr
 
 }  // namespace
 
-Rig open_rig(const std::string& spec, double fps, const Progress& progress) {
+Rig open_rig(const std::string& spec, double fps, const Progress& progress,
+             std::vector<std::string>* warnings) {
   const std::string prefix = "procedural:";
   Rig rig;
   if (spec.rfind(prefix, 0) == 0) {
@@ -83,7 +84,9 @@ Rig open_rig(const std::string& spec, double fps, const Progress& progress) {
   } else {
     LoadOptions o;
     o.fps = fps;
-    rig = load_rig(spec, o);
+    LoadReport report;
+    rig = load_rig(spec, o, &report);
+    if (warnings) *warnings = report.warnings;
   }
   if (rig.weights.empty()) {
     HeatWeightOptions h;

@@ -46,6 +46,19 @@ std::vector<Pose> clip_animation(const Rig& rig, const std::string& name);
 std::vector<Pose> pose_script_animation(const Rig& rig, const std::string& path);
 std::vector<Pose> pose_script_from_json(const Rig& rig, const std::string& text, const std::string& source);
 
+/// Joints `retarget_clip` could not match by name (they stay at rest relative to their parent).
+struct RetargetReport {
+  std::vector<std::string> unmatched_target;  ///< joints of the target rig no source joint names
+  std::vector<std::string> unmatched_source;  ///< animated joints of the source with no namesake
+};
+
+/// `clip` (of the skeleton `source`) played on `target`, joints matched by name: each matched
+/// joint turns in world space as its namesake turns away from the source's own rest pose (so the
+/// two skeletons' rest orientations may differ); bone lengths stay the target's; root joints
+/// move as the source's roots do, scaled by the ratio of the two skeletons' rest sizes. Both
+/// skeletons must be in the same scene axes. \throw InputError when no joint name matches.
+Clip retarget_clip(const Rig& source, const Clip& clip, const Rig& target, RetargetReport* report = nullptr);
+
 /// Pose between `a` and `b` at `t` ∈ [0, 1]: rotations slerped, translations and scales lerped.
 Pose interpolate(const Pose& a, const Pose& b, double t);
 

@@ -16,9 +16,14 @@
 
 namespace isokit::skinning {
 
-/// What to animate: exactly one of a clip, bends, or a pose script.
+/// What to animate: at most one of a clip, bends, or a pose script; none plays the rig's only
+/// clip (several clips: the error lists them).
 struct AnimationRequest {
-  std::string clip;                ///< a clip of the rig, by name
+  std::string clip;  ///< a clip of the rig (or of `clip_file`), by name
+  /// An animation file (a skeleton and clips, no mesh needed) whose clip is retargeted onto the
+  /// rig by joint name (`retarget_clip`); with `clip` empty its only clip.
+  std::string clip_file;
+  double fps{30};                  ///< sampling rate of `clip_file`'s clips
   std::vector<std::string> bends;  ///< `JOINT:AXIS:DEGREES`, bent from rest to the angle and back
   std::string pose_script;         ///< path of a JSON pose script (docs/skinning.md)
   int frames{31};                  ///< frames of a bend animation (rest, peak, rest)
@@ -26,15 +31,18 @@ struct AnimationRequest {
 
 /// The poses of a request, with what a report calls them.
 struct Animation {
-  std::vector<Pose> poses;       ///< local joint transforms per frame
-  std::vector<BendSpec> bends;   ///< the parsed bends (empty for a clip or a pose script)
-  std::string description;       ///< e.g. "--bend LeftLeg:x:150 (31 frames)"
+  std::vector<Pose> poses;            ///< local joint transforms per frame
+  std::vector<BendSpec> bends;        ///< the parsed bends (empty for a clip or a pose script)
+  std::string description;            ///< e.g. "--bend LeftLeg:x:150 (31 frames)"
+  std::vector<std::string> warnings;  ///< e.g. joints a clip file does not match, one line each
 };
 
-/// \throw InputError unless exactly one source is given (cheap: check before loading a rig).
+/// \throw InputError for more than one source or `frames` outside [3, 100000] (cheap: check
+/// before loading a rig).
 void check_animation_request(const AnimationRequest& request);
 
-/// \throw InputError as `check_animation_request`, or naming the bad bend / clip / file.
+/// \throw InputError as `check_animation_request`, or naming the bad bend / clip / file, or
+/// when no source is given and the rig has no clip or several (listed).
 /// `max_step_rad` > 0 is mentioned in a bend animation's description.
 Animation make_animation(const Rig& rig, const AnimationRequest& request, double max_step_rad = 0);
 

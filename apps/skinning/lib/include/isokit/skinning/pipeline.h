@@ -25,9 +25,11 @@
 namespace isokit::skinning {
 
 /// A rig from `procedural:<spec>` (procedural.h) or a file (rig_io.h, clips sampled at `fps`);
-/// heat-diffusion weights (weights.h) are computed when it has none.
+/// heat-diffusion weights (weights.h) are computed when it has none. `warnings` (optional)
+/// receives the loader's warnings (LoadReport::warnings).
 /// \throw InputError naming the file / spec and the item.
-Rig open_rig(const std::string& spec, double fps = 30, const Progress& progress = {});
+Rig open_rig(const std::string& spec, double fps = 30, const Progress& progress = {},
+             std::vector<std::string>* warnings = nullptr);
 
 enum class Method { kLbs, kDqs, kImplicit2013, kTracking2014 };
 

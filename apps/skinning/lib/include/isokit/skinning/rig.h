@@ -12,6 +12,7 @@
 #pragma once
 
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -24,10 +25,23 @@ namespace isokit::skinning {
 using Affine = Eigen::Transform<double, 3, Eigen::Affine>;
 
 struct Joint {
-  std::string name;
+  Joint(std::string name_ = {}, int parent_ = -1, const Affine& rest_local_ = Affine::Identity(),
+        const Affine& inverse_bind_ = Affine::Identity(), std::string file_name_ = {})
+      : name(std::move(name_)),
+        parent(parent_),
+        rest_local(rest_local_),
+        inverse_bind(inverse_bind_),
+        file_name(std::move(file_name_)) {}
+
+  std::string name;  ///< unique in the rig: selects the joint (`--bend`, setup files, clips)
   int parent{-1};
   Affine rest_local{Affine::Identity()};    ///< local transform (relative to the parent) at rest
   Affine inverse_bind{Affine::Identity()};  ///< mesh space -> joint space at the bind pose
+  /// The file's name when it differs from `name` (a name shared by several nodes: `name` is then
+  /// `FILE_NAME#k`, docs/skinning-io.md); empty otherwise. For display only.
+  std::string file_name;
+
+  const std::string& display_name() const { return file_name.empty() ? name : file_name; }
 };
 
 /// Per-vertex sparse skin weights in CSR form: vertex `v` has influences

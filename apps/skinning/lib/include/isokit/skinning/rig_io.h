@@ -44,6 +44,10 @@ struct LoadOptions {
   /// Influences below this fraction of a vertex's total weight are dropped before
   /// renormalising (unitless, in [0, 1)). Default 0: all kept.
   float min_weight{0.0f};
+  /// Read only the skeleton (the animated nodes and the nodes between them) at the file's node
+  /// pose, and its clips: an animation-only file (no mesh needed). The rig has no vertices.
+  /// Default false.
+  bool skeleton_only{false};
 };
 
 /// What `load_rig` found (for the CLI's summary); `warnings` lists everything it changed or
