@@ -1,10 +1,6 @@
 // SPDX-License-Identifier: MIT
-// isokit-eval: the real-rig evaluation (docs/skinning-real-rigs.md). For every rig of a folder:
-// every clip, and a bend-and-return of its elbows and knees to 120° (31 frames), baked with dqs,
-// implicit2013 and tracking2014 in the same run; one row per (rig, animation, method) in
-// OUT/eval.json and OUT/eval.md, the metrics JSON of each bake and contact sheets in OUT/<rig>/.
-// A rig, animation or method that fails becomes a row with its error line; the run goes on.
-#include <CLI/CLI.hpp>
+#include "eval_run.h"
+
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -21,23 +17,12 @@
 
 using namespace isokit::skinning;
 namespace fs = std::filesystem;
+using isokit::eval::EvalOptions;
 using isokit::eval::Row;
 
 namespace {
 
-struct Args {
-  std::vector<std::string> rigs;     ///< files or procedural specs
-  std::vector<std::string> folders;  ///< every rig file in these
-  std::vector<std::string> only;     ///< keep rigs whose name contains one of these
-  std::vector<std::string> clips;    ///< keep animations named so ("bend" = the bend-and-return)
-  std::vector<std::string> methods{"dqs", "implicit2013", "tracking2014"};
-  int max_frames{0};  ///< first frames of each clip (0 = all)
-  int bend_frames{31};
-  double bend_degrees{120};
-  double fps{30};
-  bool render{true}, self_intersections{true};
-  std::string out{"out/eval"}, commit;
-};
+using Args = EvalOptions;
 
 /// One animation of a rig: its poses and the joints its close-ups show.
 struct EvalAnimation {
@@ -278,48 +263,27 @@ void evaluate_rig(Run& run, const std::string& spec, std::size_t index, std::siz
   }
 }
 
-void add_options(CLI::App& app, Args& a) {
-  app.add_option("--rig", a.rigs, "a rig file or procedural:<spec> (repeatable)");
-  app.add_option("--rigs", a.folders, "a folder: every .glb/.gltf/.fbx/.dae in it (repeatable)");
-  app.add_option("--only", a.only, "keep the rigs whose path contains this (repeatable)");
-  app.add_option("--clip", a.clips, "keep these animations only; 'bend' = the bend-and-return (repeatable)");
-  app.add_option("--methods", a.methods, "methods to bake")->capture_default_str();
-  app.add_option("--max-frames", a.max_frames, "first N frames of each clip (0 = all)")
-      ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
-  app.add_option("--bend-frames", a.bend_frames, "frames of the bend-and-return (rest, peak, rest)")
-      ->capture_default_str()
-      ->check(CLI::Range(3, 10000));
-  app.add_option("--bend-degrees", a.bend_degrees, "peak angle of the bend-and-return")->capture_default_str();
-  app.add_option("--fps", a.fps, "clip sampling rate")->capture_default_str()->check(CLI::PositiveNumber);
-  app.add_option("--out", a.out, "output folder")->capture_default_str();
-  app.add_option("--commit", a.commit, "commit recorded in the tables");
-  app.add_flag("!--no-render", a.render, "skip the contact sheets");
-  app.add_flag("!--no-self-intersections", a.self_intersections, "skip the exact self-intersection counts");
-}
-
 }  // namespace
 
-int main(int argc, char** argv) {
-  CLI::App app{"isokit-eval: every clip of every rig, plus elbow/knee bend-and-return, with dqs, "
-               "implicit2013 and tracking2014 (docs/skinning-real-rigs.md)"};
+namespace isokit::eval {
+
+std::vector<std::string> rigs_of(const EvalOptions& options) {
+  return rig_list(options);
+}
+
+std::vector<Row> run_evaluation(const EvalOptions& options) {
   Run run;
-  add_options(app, run.args);
-  CLI11_PARSE(app, argc, argv);
-  try {
-    for (const std::string& m : run.args.methods) method_from_string(m);
-    const std::vector<std::string> rigs = rig_list(run.args);
-    if (rigs.empty()) throw isokit::InputError("isokit-eval: no rig found; give --rigs DIR or --rig FILE");
-    for (std::size_t i = 0; i < rigs.size(); ++i) evaluate_rig(run, rigs[i], i, rigs.size());
-    write_tables(run);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "isokit-eval: error: %s\n", e.what());
-    return 2;
-  }
+  run.args = options;
+  for (const std::string& m : run.args.methods) method_from_string(m);
+  const std::vector<std::string> rigs = rig_list(run.args);
+  if (rigs.empty()) throw isokit::InputError("isokit-eval: no rig found; give --rigs DIR or --rig FILE");
+  for (std::size_t i = 0; i < rigs.size(); ++i) evaluate_rig(run, rigs[i], i, rigs.size());
+  write_tables(run);
   const auto failed = std::count_if(run.rows.begin(), run.rows.end(),
                                     [](const Row& r) { return r.contains("error") && r["error"].is_string(); });
   note(run, "done: " + std::to_string(run.rows.size()) + " rows (" + std::to_string(failed) + " failed) in " +
                 run.args.out + "/eval.json and eval.md");
-  std::printf("%s", isokit::eval::markdown_table(run.rows).c_str());
-  return 0;
+  return run.rows;
 }
+
+}  // namespace isokit::eval
