@@ -165,9 +165,16 @@ void write_tables(const Run& run) {
 }
 
 /// Close-ups seen from outside the body: a view whose camera would stand on the side of the mesh's
-/// centroid (looking through the torso at an arm) looks from the other side of its box.
+/// centroid (looking through the torso at an arm) looks from the other side of its box. An up
+/// vector along the view (a bone seen end-on, a joint turning about world y) becomes the world
+/// axis most across the view.
 std::vector<RenderView> outside_views(std::vector<RenderView> views, const BakeResult& reference) {
   for (RenderView& v : views) {
+    if (v.up.cross(v.view_direction).norm() < 1e-3 * v.up.norm() * v.view_direction.norm()) {
+      int across = 0;
+      v.view_direction.cwiseAbs().minCoeff(&across);
+      v.up = Eigen::Vector3d::Unit(across);
+    }
     if (v.box.isEmpty()) continue;
     const isokit::track::Positions& p = reference.frames.at(static_cast<std::size_t>(v.frame));
     const Eigen::Vector3d centroid = p.cast<double>().colwise().mean().transpose();
