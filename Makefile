@@ -3,10 +3,12 @@
 BUILD      ?= build
 ASAN_BUILD ?= build-asan
 DEMO_OUT   ?= out/demo
+EVAL_OUT   ?= out/eval
+EVAL_ARGS  ?=
 JOBS       ?= $(shell nproc)
 CMAKE_ARGS ?=
 
-.PHONY: all deps configure build demo test test-release test-asan bench clean
+.PHONY: all deps configure build demo eval test test-release test-asan bench clean
 
 all: build
 
@@ -23,6 +25,13 @@ build: configure
 # four methods; writes $(DEMO_OUT)/ (contact sheet, metrics JSON, tracking2014 .glb).
 demo: build
 	$(BUILD)/apps/skinning/isokit-skin demo --out $(DEMO_OUT)
+
+# The real-rig evaluation: every clip of every rig in ../shared/data/rigs (and Fox), plus an
+# elbow/knee bend-and-return, with dqs, implicit2013 and tracking2014; writes $(EVAL_OUT)/
+# (eval.json, eval.md, per-rig metrics and contact sheets). Quick run: EVAL_ARGS="--max-frames 10";
+# docs/skinning-real-rigs.md.
+eval: build
+	$(BUILD)/bench/isokit-eval --out $(EVAL_OUT) --commit "$$(git rev-parse --short HEAD 2>/dev/null)" $(EVAL_ARGS)
 
 # All tests of the Release build (unit, slow, gpu — skipped without a device — and the
 # find_package consumer), then the unit tests again under ASan + UBSan.
