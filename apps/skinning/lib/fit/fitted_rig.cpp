@@ -90,11 +90,6 @@ std::vector<int> clean_partition(const std::vector<int>& labels, const track::Tr
 
 namespace {
 
-/// A capsule "matches" a part whose HRBF failed when its vertex -> surface p95 is at most this
-/// fraction of its radius (docs/skinning.md, "No vertex without a field": the humanoid's toe
-/// 0.43, its shoulders' open band 0.75).
-constexpr double kCapsuleMatch = 0.5;
-
 /// The partition seen per joint (recomputed at each pass, after failed fits are merged).
 struct JointParts {
   const Rig& rig;
@@ -446,11 +441,13 @@ FittedRig::FittedRig(const Rig& rig, const SkinSetup& setup, const Progress& pro
   std::vector<int> first_partition;
   for (int pass = 0; pass < 2; ++pass) {
     if (pass == 1) {
-      // A failed part that a capsule matches (vertex -> surface p95 <= kCapsuleMatch r) keeps
-      // its own joint's motion; the others share a touching neighbour's primitive.
+      // With SkinSetup::capsule_match, a failed part that a capsule matches (vertex -> surface p95
+      // <= capsule_match r) keeps its own joint's motion; the others share a touching neighbour's
+      // primitive.
       const JointParts parts = joint_parts(r, jp, partition_);
       for (int j = 0; j < nj; ++j)
-        if (!bones_[j].fitted && parts.count[j] > 0) fit_fallback(parts, setup, j, kCapsuleMatch, bones_[j]);
+        if (setup.capsule_match > 0 && !bones_[j].fitted && parts.count[j] > 0)
+          fit_fallback(parts, setup, j, setup.capsule_match, bones_[j]);
       if (!merge_failed_fits(r, bones_, partition_, refit)) break;
     }
     const JointParts parts = joint_parts(r, jp, partition_);

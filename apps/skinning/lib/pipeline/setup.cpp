@@ -106,8 +106,11 @@ void read_joints(const json& js, const std::string& source, SkinSetup& s) {
 }
 
 /// Section `fit`: the HRBF fit of each part (implicit::PartFitOptions).
-void read_fit(const json& f, const std::string& w, implicit::PartFitOptions& fit) {
-  check_keys(f, {"samples", "cull_h", "grid_resolution", "seed", "grid", "opening_offset"}, w);
+void read_fit(const json& f, const std::string& w, implicit::PartFitOptions& fit, double& capsule_match) {
+  check_keys(f, {"samples", "cull_h", "grid_resolution", "seed", "grid", "opening_offset", "capsule_match"}, w);
+  read(f, "capsule_match", capsule_match, w);
+  require(std::isfinite(capsule_match) && capsule_match >= 0 && capsule_match <= 10, w + ".capsule_match",
+          "must be in [0, 10] (got " + format_number(capsule_match) + ")", "use 0 (off, the default) or e.g. 0.5");
   read(f, "samples", fit.target_samples, w);
   read(f, "cull_h", fit.cull_h, w);
   read(f, "grid_resolution", fit.grid_resolution, w);
@@ -252,7 +255,7 @@ SkinSetup setup_from_json(const std::string& text, const std::string& source) {
   read(j, "default_operator", def, source);
   s.default_operator = joint_operator_from_string(def, source + ".default_operator");
   if (j.contains("joints")) read_joints(j.at("joints"), source, s);
-  if (j.contains("fit")) read_fit(j.at("fit"), source + ".fit", s.fit);
+  if (j.contains("fit")) read_fit(j.at("fit"), source + ".fit", s.fit, s.capsule_match);
   if (j.contains("operators")) read_operators(j.at("operators"), source + ".operators", s);
   if (j.contains("tracker")) read_tracker(j.at("tracker"), source + ".tracker", s);
   if (j.contains("projector")) read_projector(j.at("projector"), source + ".projector", s.projector);

@@ -77,6 +77,12 @@ struct SkinSetup {
   JointOperator default_operator{JointOperator::kAuto};
   std::map<std::string, JointSettings> joints;  ///< by joint name; absent joints: the defaults
   implicit::PartFitOptions fit{};               ///< HRBF fit per part (2013 §4.1). Setup key `fit`
+  /// A part whose HRBF fails keeps a fitted capsule (and its own joint's motion) instead of
+  /// sharing a touching neighbour's primitive when the capsule's vertex → surface p95 is at most
+  /// this many times its radius; 0 = off: such a part shares first, and a capsule is only the last
+  /// resort (not in the papers; docs/skinning.md, "No vertex without a field"). In [0, 10];
+  /// default 0. Setup key `fit.capsule_match`.
+  double capsule_match{0};
   int operator_resolution{128};  ///< grid operator resolution per axis, [8, 1024] (2014 §6.1: 128)
   int operator_slices{128};      ///< grid operator slices, [8, 1024] (2014 §6.1: 128)
   /// Caps a `bulge` joint's controller by the same controller of the joint's own bend angle β (the
