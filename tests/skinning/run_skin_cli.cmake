@@ -80,6 +80,8 @@ foreach(args "bake;procedural:cylinder;--bend;Elbow:x:90;--out;${OUT}/bad.glb"
              "bake;procedural:cylinder;--bend;Bone1:x:90;--fps;0;--out;${OUT}/bad.glb"
              "bake;procedural:cylinder;--bend;Bone1:x:90;--frames;2;--out;${OUT}/bad.glb"
              "bake;procedural:cylinder;--out;${OUT}/bad.glb"
+             "bake;procedural:cylinder;--bend;Bone1:x:90;--device;cuda;--out;${OUT}/bad.glb"
+             "bake;procedural:cylinder;--bend;Bone1:x:90;--device;tpu;--out;${OUT}/bad.glb"
              "demo;--out;${OUT}/bad;--vertices;-5")
   execute_process(COMMAND "${EXE}" ${args} RESULT_VARIABLE rc OUTPUT_VARIABLE o ERROR_VARIABLE e)
   if(NOT rc EQUAL 2 OR NOT e MATCHES "error")

@@ -95,3 +95,13 @@ TEST_CASE("bake job: fit warnings name under-resolved parts; outputs are written
   CHECK(fs::exists(dir / "ply" / "frame_0002.ply"));
   fs::remove_all(dir);
 }
+
+TEST_CASE("bake job: --device names cpu or cuda; cuda is refused with its reason", "[skinning][bake_job]") {
+  CHECK(device_from_string("cpu") == Device::kCpu);
+  CHECK(device_from_string("cuda") == Device::kCuda);
+  CHECK_THROWS_WITH(device_from_string("gpu"), Catch::Contains("use cpu or cuda"));
+  CHECK_NOTHROW(check_device(Device::kCpu));
+  // No device tracker exists yet: without a CUDA build, without a device, or with one, the reason
+  // is named and the fix is --device cpu.
+  CHECK_THROWS_WITH(check_device(Device::kCuda), Catch::Contains("--device cuda: ") && Catch::Contains("use --device cpu"));
+}

@@ -123,7 +123,7 @@ struct Args {
   std::string rig;
   bool info_fit{false};
   std::string info_setup;
-  std::string method{"tracking2014"}, setup;
+  std::string method{"tracking2014"}, setup, device{"cpu"};
   AnimationRequest animation;
   double fps{30}, max_step{0};
   bool compare{false}, no_self{false};
@@ -167,6 +167,8 @@ CLI::App* add_bake(CLI::App& app, Args& a) {
       ->capture_default_str();
   bake->add_option("--fps", a.fps, "clip sampling / output frame rate")->capture_default_str();
   bake->add_option("--max-step-rad", a.max_step, kMaxStepHelp);
+  bake->add_option("--device", a.device, "cpu | cuda (the CUDA tracker needs a CUDA build and a GPU)")
+      ->capture_default_str();
   bake->add_option("--setup", a.setup, "JSON setup file: per-joint operators, relaxation, options");
   bake->add_option("--out", a.outputs.glb, "baked .glb (one morph target per frame)")->required();
   bake->add_option("--metrics", a.outputs.metrics, "write the quality metrics (QUALITY.md) as JSON");
@@ -237,6 +239,7 @@ int run_info(const Args& a, const Progress& progress) {
 
 /// Bakes `methods` (the first one's result is written, unless `main` says otherwise).
 int run_bake(const Args& a, const std::vector<Method>& methods, Method main, const Progress& progress) {
+  check_device(device_from_string(a.device));
   check_animation_request(a.animation);
   SkinSetup setup = a.setup.empty() ? SkinSetup{} : load_setup(a.setup);
   if (a.max_step > 0) setup.substeps.max_step_rad = a.max_step;

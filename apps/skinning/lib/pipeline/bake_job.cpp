@@ -7,6 +7,9 @@
 
 #include "isokit/core/error.h"
 #include "isokit/skinning/rig_io.h"
+#if defined(ISOKIT_HAVE_CUDA)
+#include "isokit/implicit/cuda/device_eval.h"
+#endif
 
 namespace isokit::skinning {
 
@@ -148,6 +151,27 @@ int peak_frame(const std::vector<Pose>& poses) {
     }
   }
   return peak;
+}
+
+Device device_from_string(const std::string& s) {
+  if (s == "cpu") return Device::kCpu;
+  if (s == "cuda") return Device::kCuda;
+  throw InputError("--device: unknown device '" + s + "'; use cpu or cuda");
+}
+
+void check_device(Device device) {
+  if (device == Device::kCpu) return;
+#if defined(ISOKIT_HAVE_CUDA)
+  if (!implicit::cuda::device_available())
+    throw InputError("--device cuda: no usable CUDA device (the CUDA runtime reports none); use --device cpu");
+  throw InputError(
+      "--device cuda: this build has no device tracker yet (only the device field evaluation; "
+      "docs/skinning.md, \"Devices\"); use --device cpu");
+#else
+  throw InputError(
+      "--device cuda: isokit-skin was built without the CUDA backend (nvcc was not found when it was "
+      "configured); install the CUDA Toolkit and build again, or use --device cpu");
+#endif
 }
 
 const BakeResult& main_result(const std::vector<BakeResult>& results, Method method) {

@@ -57,6 +57,17 @@ int peak_frame(const std::vector<Pose>& poses);
 /// The result of `method` (the one whose bake is written). \throw InputError when absent.
 const BakeResult& main_result(const std::vector<BakeResult>& results, Method method);
 
+/// Where a bake runs. `kCpu` is the reference (TBB); `kCuda` needs a CUDA build, a usable device
+/// and the device tracker (issue 22: not written yet, so `check_device` refuses it for now).
+enum class Device { kCpu, kCuda };
+
+/// \throw InputError listing the devices for an unknown name.
+Device device_from_string(const std::string& s);
+
+/// \throw InputError naming why `device` cannot run a bake here (no CUDA build, no usable device,
+/// no device tracker); nothing for `kCpu`. Cheap: check before loading a rig.
+void check_device(Device device);
+
 /// Where a bake's outputs go; an empty path writes nothing.
 struct BakeOutputs {
   std::string glb;         ///< the main result, one morph target per frame
