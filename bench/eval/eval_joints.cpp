@@ -47,7 +47,8 @@ std::vector<int> subtree_heights(const Rig& rig) {
   std::vector<int> height(rig.joints.size(), 0);
   for (std::size_t j = rig.joints.size(); j-- > 0;) {
     const int p = rig.joints[j].parent;
-    if (p >= 0) height[static_cast<std::size_t>(p)] = std::max(height[static_cast<std::size_t>(p)], height[j] + 1);
+    if (p >= 0)
+      height[static_cast<std::size_t>(p)] = std::max(height[static_cast<std::size_t>(p)], height[j] + 1);
   }
   return height;
 }
@@ -82,12 +83,14 @@ std::vector<int> chain_middles(const Rig& rig, const std::string& word) {
     std::vector<int> chain{int(j)};
     while (children[static_cast<std::size_t>(chain.back())].size() == 1)
       chain.push_back(children[static_cast<std::size_t>(chain.back())][0]);
-    const bool named = word.empty() || std::any_of(chain.begin(), chain.end(), [&](int c) {
-      return lower(rig.joints[static_cast<std::size_t>(c)].name).find(word) != std::string::npos;
-    });
+    const bool named =
+        word.empty() || std::any_of(chain.begin(), chain.end(), [&](int c) {
+          return lower(rig.joints[static_cast<std::size_t>(c)].name).find(word) != std::string::npos;
+        });
     if (chain.size() >= 2 && named) chains.push_back(chain);
   }
-  std::stable_sort(chains.begin(), chains.end(), [](const auto& a, const auto& b) { return a.size() > b.size(); });
+  std::stable_sort(chains.begin(), chains.end(),
+                   [](const auto& a, const auto& b) { return a.size() > b.size(); });
   if (chains.size() > 4) chains.resize(4);
   std::vector<int> out;
   for (const std::vector<int>& c : chains) out.push_back(c[c.size() / 2]);
@@ -100,7 +103,8 @@ Eigen::Vector3d child_direction(const Rig& rig, int joint, const std::vector<Eig
                                 const std::vector<int>& dominant) {
   Eigen::Vector3d best = Eigen::Vector3d::Zero();
   for (std::size_t c = 0; c < rig.joints.size(); ++c)
-    if (rig.joints[c].parent == joint && (pos[c] - pos[joint]).norm() > best.norm()) best = pos[c] - pos[joint];
+    if (rig.joints[c].parent == joint && (pos[c] - pos[joint]).norm() > best.norm())
+      best = pos[c] - pos[joint];
   if (best.norm() > 0) return best;
   Eigen::Vector3d sum = Eigen::Vector3d::Zero();
   int n = 0;
@@ -137,7 +141,9 @@ BendSpec fold_axis(const Rig& rig, int joint, const std::vector<Eigen::Vector3d>
   }
   const Eigen::Vector3d dn = d.norm() > 0 ? Eigen::Vector3d(d.normalized()) : Eigen::Vector3d::UnitY();
   const double least = dn.cwiseAbs().minCoeff();
-  b.axis = std::abs(dn.x()) <= least + 1e-3 ? 0 : std::abs(dn.y()) <= least + 1e-3 ? 1 : 2;  // x first on ties
+  b.axis = std::abs(dn.x()) <= least + 1e-3   ? 0
+           : std::abs(dn.y()) <= least + 1e-3 ? 1
+                                              : 2;  // x first on ties
   return b;
 }
 
@@ -175,8 +181,9 @@ std::vector<BendSpec> moving_joints(const Rig& rig, const std::vector<skinning::
     }
     all.push_back(b);
   }
-  std::stable_sort(all.begin(), all.end(),
-                   [](const BendSpec& a, const BendSpec& b) { return std::abs(a.degrees) > std::abs(b.degrees); });
+  std::stable_sort(all.begin(), all.end(), [](const BendSpec& a, const BendSpec& b) {
+    return std::abs(a.degrees) > std::abs(b.degrees);
+  });
   if (all.size() > static_cast<std::size_t>(count)) all.resize(static_cast<std::size_t>(count));
   return all;
 }

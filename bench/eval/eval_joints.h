@@ -26,7 +26,7 @@ std::vector<skinning::BendSpec> fold_joints(const skinning::Rig& rig, double deg
 /// The `count` joints whose local rotation from the first pose grows largest over `poses`
 /// (joints that own no vertex left out), as bends (axis: the local axis closest to the rotation
 /// axis at that frame; degrees: its angle) for close-up views.
-std::vector<skinning::BendSpec> moving_joints(const skinning::Rig& rig, const std::vector<skinning::Pose>& poses,
-                                              int count);
+std::vector<skinning::BendSpec> moving_joints(const skinning::Rig& rig,
+                                              const std::vector<skinning::Pose>& poses, int count);
 
 }  // namespace isokit::eval

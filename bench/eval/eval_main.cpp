@@ -21,7 +21,8 @@ void add_options(CLI::App& app, isokit::eval::EvalOptions& a) {
   app.add_option("--bend-frames", a.bend_frames, "frames of the bend-and-return (rest, peak, rest)")
       ->capture_default_str()
       ->check(CLI::Range(3, 10000));
-  app.add_option("--bend-degrees", a.bend_degrees, "peak angle of the bend-and-return")->capture_default_str();
+  app.add_option("--bend-degrees", a.bend_degrees, "peak angle of the bend-and-return")
+      ->capture_default_str();
   app.add_option("--fps", a.fps, "clip sampling rate")->capture_default_str()->check(CLI::PositiveNumber);
   app.add_option("--out", a.out, "output folder")->capture_default_str();
   app.add_option("--commit", a.commit, "commit recorded in the tables");
@@ -32,8 +33,9 @@ void add_options(CLI::App& app, isokit::eval::EvalOptions& a) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"isokit-eval: every clip of every rig, plus elbow/knee bend-and-return, with dqs, "
-               "implicit2013 and tracking2014 (docs/skinning-real-rigs.md)"};
+  CLI::App app{
+      "isokit-eval: every clip of every rig, plus elbow/knee bend-and-return, with dqs, "
+      "implicit2013 and tracking2014 (docs/skinning-real-rigs.md)"};
   isokit::eval::EvalOptions options;
   add_options(app, options);
   CLI11_PARSE(app, argc, argv);

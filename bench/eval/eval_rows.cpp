@@ -76,9 +76,10 @@ Row method_row(const json& m, bool closed) {
   r["worst_ms"] = worst_over(frames, "ms");
   r["tracker_calls"] = sum_over(frames, "tracker_calls", "tracker_calls");
   r["capped_calls"] = sum_over(frames, "capped_calls", "calls_at_cap");
-  const bool calls = r["tracker_calls"].is_number() && r["capped_calls"].is_number() &&
-                     r["tracker_calls"].get<double>() > 0;
-  r["capped_share"] = calls ? json(r["capped_calls"].get<double>() / r["tracker_calls"].get<double>()) : json(nullptr);
+  const bool calls =
+      r["tracker_calls"].is_number() && r["capped_calls"].is_number() && r["tracker_calls"].get<double>() > 0;
+  r["capped_share"] =
+      calls ? json(r["capped_calls"].get<double>() / r["tracker_calls"].get<double>()) : json(nullptr);
   return r;
 }
 
@@ -126,7 +127,8 @@ std::string markdown_table(const std::vector<Row>& rows) {
        "| volume min / max | iso residual | rest recovery | ms mean / worst | calls at cap |\n"
        "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
   for (const Row& r : rows) {
-    o << "| " << r.value("rig", "") << " | " << r.value("animation", "") << " | " << r.value("method", "") << " | ";
+    o << "| " << r.value("rig", "") << " | " << r.value("animation", "") << " | " << r.value("method", "")
+      << " | ";
     if (r.contains("error") && r["error"].is_string()) {
       o << "**failed:** " << r["error"].get<std::string>() << " | | | | | | | | |\n";
       continue;
@@ -134,11 +136,13 @@ std::string markdown_table(const std::vector<Row>& rows) {
     o << r["frames"].get<int>() << " | " << count_cell(r["self_intersections_new"]) << " ("
       << count_cell(r["self_intersections"]) << ") | " << count_cell(r["new_inverted_triangles"]) << " | "
       << cell(r["edge_distortion_max"], "%.2f") << " / " << cell(r["edge_distortion_mean"], "%.3f") << " | "
-      << (r["closed"].get<bool>() ? cell(r["volume_ratio_min"], "%.3f") + " / " + cell(r["volume_ratio_max"], "%.3f")
-                                  : std::string("(open)"))
+      << (r["closed"].get<bool>()
+              ? cell(r["volume_ratio_min"], "%.3f") + " / " + cell(r["volume_ratio_max"], "%.3f")
+              : std::string("(open)"))
       << " | " << cell(r["iso_residual_max"], "%.1e") << " | " << cell(r["rest_recovery"], "%.1e") << " | "
       << cell(r["mean_ms"], "%.1f") << " / " << cell(r["worst_ms"], "%.1f") << " | "
-      << cell(r["capped_share"].is_number() ? json(100 * r["capped_share"].get<double>()) : json(nullptr), "%.0f %%")
+      << cell(r["capped_share"].is_number() ? json(100 * r["capped_share"].get<double>()) : json(nullptr),
+              "%.0f %%")
       << " |\n";
   }
   return o.str();

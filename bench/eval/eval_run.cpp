@@ -193,8 +193,9 @@ std::vector<BakeResult> bake_methods(Run& run, Skinner& skinner, const std::stri
     const auto t0 = std::chrono::steady_clock::now();
     try {
       results.push_back(skinner.bake(method_from_string(name), anim.poses, options));
-      note(run, "  " + label + " / " + anim.name + " / " + name + ": " + isokit::format_number(results.back().mean_ms) +
-                    " ms/frame (" + isokit::format_number(seconds_since(t0)) + " s with metrics)");
+      note(run, "  " + label + " / " + anim.name + " / " + name + ": " +
+                    isokit::format_number(results.back().mean_ms) + " ms/frame (" +
+                    isokit::format_number(seconds_since(t0)) + " s with metrics)");
     } catch (const std::exception& e) {
       run.rows.push_back(isokit::eval::error_row(label, anim.name, name, e.what()));
       note(run, "  " + label + " / " + anim.name + " / " + name + " failed: " + e.what());
@@ -221,10 +222,12 @@ void evaluate_animation(Run& run, Skinner& skinner, const std::string& label, co
   for (Row& r : isokit::eval::rows_from_metrics(nlohmann::json::parse(metrics), label, anim.name, closed))
     run.rows.push_back(std::move(r));
   if (!run.args.render) return;
-  const std::vector<RenderView> views = outside_views(bend_views(rig, skinner.fitted().partition(), anim.views,
-                                                               anim.poses, peak_frame(anim.poses), results.front()),
-                                                    results.front());
-  const std::string sheet = dir + (anim.is_bend ? std::string("contact_sheet") : file_name(anim.name)) + ".png";
+  const std::vector<RenderView> views =
+      outside_views(bend_views(rig, skinner.fitted().partition(), anim.views, anim.poses,
+                               peak_frame(anim.poses), results.front()),
+                    results.front());
+  const std::string sheet =
+      dir + (anim.is_bend ? std::string("contact_sheet") : file_name(anim.name)) + ".png";
   write_comparison_sheet(rig, results, views, label + " — " + context.animation, sheet);
 }
 
@@ -234,7 +237,8 @@ namespace {
 
 Progress fit_progress(const Run& run, const std::string& label) {
   return [&run, label](const std::string& stage, int done, int total) {
-    if (total > 0 && done == total && stage.rfind("bake", 0) != 0) note(run, "  " + label + ": " + stage + " done (" + std::to_string(total) + ")");
+    if (total > 0 && done == total && stage.rfind("bake", 0) != 0)
+      note(run, "  " + label + ": " + stage + " done (" + std::to_string(total) + ")");
   };
 }
 
@@ -286,8 +290,9 @@ std::vector<Row> run_evaluation(const EvalOptions& options) {
   if (rigs.empty()) throw isokit::InputError("isokit-eval: no rig found; give --rigs DIR or --rig FILE");
   for (std::size_t i = 0; i < rigs.size(); ++i) evaluate_rig(run, rigs[i], i, rigs.size());
   write_tables(run);
-  const auto failed = std::count_if(run.rows.begin(), run.rows.end(),
-                                    [](const Row& r) { return r.contains("error") && r["error"].is_string(); });
+  const auto failed = std::count_if(run.rows.begin(), run.rows.end(), [](const Row& r) {
+    return r.contains("error") && r["error"].is_string();
+  });
   note(run, "done: " + std::to_string(run.rows.size()) + " rows (" + std::to_string(failed) + " failed) in " +
                 run.args.out + "/eval.json and eval.md");
   return run.rows;

@@ -44,7 +44,8 @@ void principal_segment(const std::vector<Vec3d>& v, double shrink, Vec3d& a, Vec
   for (const Vec3d& p : v) c += Eigen::Vector3d(p.x, p.y, p.z);
   c /= double(v.size());
   Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-  for (const Vec3d& p : v) cov += (Eigen::Vector3d(p.x, p.y, p.z) - c) * (Eigen::Vector3d(p.x, p.y, p.z) - c).transpose();
+  for (const Vec3d& p : v)
+    cov += (Eigen::Vector3d(p.x, p.y, p.z) - c) * (Eigen::Vector3d(p.x, p.y, p.z) - c).transpose();
   const Eigen::Vector3d axis = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(cov).eigenvectors().col(2);
   double lo = std::numeric_limits<double>::infinity(), hi = -lo;
   for (const Vec3d& p : v) {
@@ -70,8 +71,8 @@ FittedPart fit_capsule(const MeshPart& part, const PartFitOptions& o) {
   require(!part.vertices.empty(), name, "the sub-mesh is empty", "assign vertices to this bone");
   Box3d box;
   for (const Vec3d& p : part.vertices) {
-    require(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z), name + ": vertex", "is not finite",
-            "remove NaN/inf vertices");
+    require(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z), name + ": vertex",
+            "is not finite", "remove NaN/inf vertices");
     box.extend(p);
   }
   const double extent = norm(box.size());

@@ -46,7 +46,8 @@ std::vector<Vec3d> iso_points(const Field& field, int n, double& spacing) {
   for (int k = 0; k < n; ++k)
     for (int j = 0; j < n; ++j)
       for (int i = 0; i < n; ++i)
-        nodes.push_back({box.lo.x + step.x * float(i), box.lo.y + step.y * float(j), box.lo.z + step.z * float(k)});
+        nodes.push_back(
+            {box.lo.x + step.x * float(i), box.lo.y + step.y * float(j), box.lo.z + step.z * float(k)});
   std::vector<FieldSample> f(nodes.size());
   field.eval_batch(nodes.data(), nodes.size(), f.data());
   auto at = [n](int i, int j, int k) { return std::size_t((k * n + j) * n + i); };
@@ -89,8 +90,8 @@ double newton_distance(const Field& field, const Vec3d& p, int steps, double max
 double point_triangle_distance(const Vec3d& p, const Vec3d& a, const Vec3d& b, const Vec3d& c) {
   const Vec3d ab = b - a, ac = c - a, n = cross(ab, ac);
   const double n2 = squared_norm(n);
-  const double edges = std::min({point_segment_distance(p, a, b), point_segment_distance(p, b, c),
-                                 point_segment_distance(p, c, a)});
+  const double edges = std::min(
+      {point_segment_distance(p, a, b), point_segment_distance(p, b, c), point_segment_distance(p, c, a)});
   if (!(n2 > 1e-24 * std::max(squared_norm(ab), squared_norm(ac)))) return edges;
   // Projection onto the plane; inside the triangle when its barycentric coordinates are >= 0.
   const Vec3d ap = p - a;
@@ -101,7 +102,8 @@ double point_triangle_distance(const Vec3d& p, const Vec3d& a, const Vec3d& b, c
   return edges;
 }
 
-FitDistances fit_distances(const Field& field, const Rigid3d& local_to_world, const std::vector<Vec3d>& vertices,
+FitDistances fit_distances(const Field& field, const Rigid3d& local_to_world,
+                           const std::vector<Vec3d>& vertices,
                            const std::vector<std::array<int, 3>>& triangles,
                            const std::function<bool(const Vec3d&)>& exclude, const FitDistanceOptions& o) {
   require(o.resolution >= 8 && o.resolution <= 256, "fit distances: resolution",
@@ -111,8 +113,8 @@ FitDistances fit_distances(const Field& field, const Rigid3d& local_to_world, co
   const int nv = static_cast<int>(vertices.size());
   for (const auto& t : triangles)
     for (int k : t)
-      require(k >= 0 && k < nv, "fit distances: triangle", "indexes vertex " + std::to_string(k) + " of " +
-                                                               std::to_string(nv), "fix the indices");
+      require(k >= 0 && k < nv, "fit distances: triangle",
+              "indexes vertex " + std::to_string(k) + " of " + std::to_string(nv), "fix the indices");
   FitDistances out;
   out.vertices = nv;
   double spacing = 0;

@@ -31,7 +31,8 @@ double span(const Rig& rig, const Pose& pose, int joint) {
   const int parent = rig.joints[static_cast<std::size_t>(joint)].parent;
   for (std::size_t c = 0; c < rig.joints.size(); ++c)
     if (rig.joints[c].parent == joint)
-      best = std::max(best, (world[c].translation() - world[static_cast<std::size_t>(parent)].translation()).norm());
+      best = std::max(
+          best, (world[c].translation() - world[static_cast<std::size_t>(parent)].translation()).norm());
   return best;
 }
 
@@ -48,7 +49,8 @@ TEST_CASE("eval: elbows and knees of the humanoid by name, each folded", "[eval]
   }
 }
 
-TEST_CASE("eval: a straight two-bone limb without limb names bends its middle joint about local x", "[eval]") {
+TEST_CASE("eval: a straight two-bone limb without limb names bends its middle joint about local x",
+          "[eval]") {
   const Rig rig = make_procedural("cylinder");
   const std::vector<BendSpec> bends = fold_joints(rig, 120);
   REQUIRE(names(rig, bends) == std::vector<std::string>{"Bone1"});
@@ -57,7 +59,8 @@ TEST_CASE("eval: a straight two-bone limb without limb names bends its middle jo
 }
 
 TEST_CASE("eval: rows use the optional metrics when present and show — when absent", "[eval]") {
-  nlohmann::json m = nlohmann::json::parse(R"({"methods": {"tracking2014": {"mean_ms": 2.5, "rest_recovery": null,
+  nlohmann::json m =
+      nlohmann::json::parse(R"({"methods": {"tracking2014": {"mean_ms": 2.5, "rest_recovery": null,
     "worst": {"self_intersections": 7, "new_inverted_triangles": 3, "edge_distortion_max": 0.5,
               "edge_distortion_mean": 0.1, "iso_residual_max": 0.01},
     "frames": [{"ms": 2, "volume_ratio": 0.9}, {"ms": 3, "volume_ratio": 1.1}]}}})");
@@ -111,7 +114,8 @@ TEST_CASE("eval: a rig folder (a capsule with a clip, a broken file) gives every
     CHECK(r["method"] == methods[k % 3]);
     CHECK(r["frames"] == (k < 3 ? 5 : 4));
     CHECK(r["edge_distortion_max"].is_number());
-    CHECK(r["rest_recovery"].is_number() == (k < 3));  // the bend returns to rest; 4 frames of the wave do not
+    CHECK(r["rest_recovery"].is_number() ==
+          (k < 3));  // the bend returns to rest; 4 frames of the wave do not
   }
   for (const char* f : {"eval.json", "eval.md", "capsule/bend.metrics.json", "capsule/wave.metrics.json",
                         "capsule/contact_sheet.png", "capsule/wave.png"})

@@ -19,7 +19,6 @@ using namespace isokit::implicit;
 
 namespace {
 
-
 /// Surface of revolution around the segment `a`–`b`: rings at parameters along a profile
 /// `(axial offset, radius)`; `cap0` / `cap1` add pole vertices closing the ends.
 MeshPart revolve(const std::vector<std::pair<double, double>>& profile, const Vec3d& a, const Vec3d& b,
@@ -115,9 +114,11 @@ namespace {
 /// A capsule of radius `R` around the segment (0,0,0)-(0,0,L), as a closed mesh.
 MeshPart capsule_part(double R, double L) {
   std::vector<std::pair<double, double>> prof;
-  for (int i = 1; i < 8; ++i) prof.push_back({-R * std::cos(0.5 * kPi * i / 8), R * std::sin(0.5 * kPi * i / 8)});
+  for (int i = 1; i < 8; ++i)
+    prof.push_back({-R * std::cos(0.5 * kPi * i / 8), R * std::sin(0.5 * kPi * i / 8)});
   for (int i = 0; i <= 10; ++i) prof.push_back({L * i / 10, R});
-  for (int i = 1; i < 8; ++i) prof.push_back({L + R * std::sin(0.5 * kPi * i / 8), R * std::cos(0.5 * kPi * i / 8)});
+  for (int i = 1; i < 8; ++i)
+    prof.push_back({L + R * std::sin(0.5 * kPi * i / 8), R * std::cos(0.5 * kPi * i / 8)});
   return revolve(prof, {0, 0, 0}, {0, 0, L}, 32, true, true, {0, 0, -R}, {0, 0, L + R});
 }
 
@@ -148,8 +149,8 @@ TEST_CASE("fit distances both ways: small for a fitted capsule, large for a bad 
   const FittedPart fp = fit_part(part);
   SECTION("the fitted primitive: both ways within a lattice spacing") {
     const FitDistances d = fit_distances(*fp.field(), fp.local_to_world, part.vertices, part.triangles);
-    INFO("vertex->surface max " << d.to_surface_max / R << " R, surface->vertex max " << d.from_surface_max / R
-                                << " R over " << d.surface_points << " points");
+    INFO("vertex->surface max " << d.to_surface_max / R << " R, surface->vertex max "
+                                << d.from_surface_max / R << " R over " << d.surface_points << " points");
     CHECK(d.vertices == int(part.vertices.size()));
     CHECK(d.surface_points > 500);
     CHECK(d.to_surface_p95 <= d.to_surface_max);
@@ -188,8 +189,9 @@ TEST_CASE("fit distances both ways: small for a fitted capsule, large for a bad 
     const FitDistances none = fit_distances(Dim{}, Rigid3d{}, part.vertices, part.triangles);
     CHECK(std::isinf(none.to_surface_max));
     CHECK(none.from_surface_max == 0);
-    CHECK_THROWS_AS(fit_distances(exact, Rigid3d{}, part.vertices, part.triangles, {}, FitDistanceOptions{4, 10}),
-                    InputError);
+    CHECK_THROWS_AS(
+        fit_distances(exact, Rigid3d{}, part.vertices, part.triangles, {}, FitDistanceOptions{4, 10}),
+        InputError);
   }
 }
 

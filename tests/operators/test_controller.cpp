@@ -10,8 +10,7 @@
 using namespace isokit;
 using operators::Controller;
 
-namespace {
-}
+namespace {}
 
 TEST_CASE("controller presets follow the papers' shapes", "[operators][controller]") {
   const Controller dc = Controller::preset("contact");

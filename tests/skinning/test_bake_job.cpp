@@ -103,5 +103,6 @@ TEST_CASE("bake job: --device names cpu or cuda; cuda is refused with its reason
   CHECK_NOTHROW(check_device(Device::kCpu));
   // No device tracker exists yet: without a CUDA build, without a device, or with one, the reason
   // is named and the fix is --device cpu.
-  CHECK_THROWS_WITH(check_device(Device::kCuda), Catch::Contains("--device cuda: ") && Catch::Contains("use --device cpu"));
+  CHECK_THROWS_WITH(check_device(Device::kCuda),
+                    Catch::Contains("--device cuda: ") && Catch::Contains("use --device cpu"));
 }

@@ -6,8 +6,8 @@
 
 #include <cmath>
 
-#include "isokit/skinning/fit_quality.h"
 #include "isokit/skinning/animation.h"
+#include "isokit/skinning/fit_quality.h"
 #include "isokit/skinning/fitted_rig.h"
 #include "isokit/skinning/pipeline.h"
 #include "isokit/skinning/procedural.h"
@@ -40,7 +40,8 @@ Rig blade_rig() {
     }
   r.rest = rest;
   r.triangles = tris;
-  r.joints.push_back({"Blade", 1, Affine(Eigen::Translation3d(0.8, 0.5, 0)), Affine(Eigen::Translation3d(-0.8, -1.5, 0))});
+  r.joints.push_back(
+      {"Blade", 1, Affine(Eigen::Translation3d(0.8, 0.5, 0)), Affine(Eigen::Translation3d(-0.8, -1.5, 0))});
   for (int v = base; v < rest.rows(); ++v) {
     r.weights.joints.push_back(2);
     r.weights.weights.push_back(1.f);
@@ -59,9 +60,10 @@ TEST_CASE("fit quality: the capsule rig's primitives match their parts both ways
   CHECK(q.vertices_without_field == 0);
   CHECK(q.unrelated_inside() == 0);
   for (const PartQuality& p : q.parts) {
-    INFO("joint " << p.joint << ": vertex->surface p95 " << p.distances.to_surface_p95 / q.diagonal
-                  << " max " << p.distances.to_surface_max / q.diagonal << ", surface->vertex p95 "
-                  << p.distances.from_surface_p95 / q.diagonal << " max " << p.distances.from_surface_max / q.diagonal);
+    INFO("joint " << p.joint << ": vertex->surface p95 " << p.distances.to_surface_p95 / q.diagonal << " max "
+                  << p.distances.to_surface_max / q.diagonal << ", surface->vertex p95 "
+                  << p.distances.from_surface_p95 / q.diagonal << " max "
+                  << p.distances.from_surface_max / q.diagonal);
     CHECK(fitted.bones()[static_cast<std::size_t>(p.joint)].rule == FitRule::hrbf);
     CHECK(p.distances.surface_points > 100);
     // The limb (Bone1) meets the issue's targets (p95 <= 1 %, max <= 3 % of the diagonal; measured
@@ -83,7 +85,7 @@ TEST_CASE("no vertex without a field: a blade whose HRBF cannot be bounded gets 
   const FittedRig fitted(blade_rig(), SkinSetup{});
   const BonePart& blade = fitted.bones()[2];
   INFO("blade: rule " << to_string(blade.rule) << ", error " << blade.error);
-  CHECK(blade.rule == FitRule::capsule);  // a separate piece shares no neighbour's primitive
+  CHECK(blade.rule == FitRule::capsule);           // a separate piece shares no neighbour's primitive
   CHECK(fitted.bones()[1].rule == FitRule::hrbf);  // Bone1 keeps its own fit, not bloated over the blade
   const FitQuality q = fit_quality(fitted);
   CHECK(q.vertices_without_field == 0);
@@ -102,8 +104,9 @@ TEST_CASE("no vertex without a field: a blade whose HRBF cannot be bounded gets 
 // max 0.74 against 0.61); with `capsule_match` a capsule matches it (vertex -> surface p95 0.43 r)
 // and keeps it moving with its own joint: 0.55. (Off by default: on the Fox the capsules cost
 // more inverted triangles and volume; docs/skinning.md.)
-TEST_CASE("a part without an HRBF follows its own joint: the humanoid's toe bent 90 degrees, no worse than DQS",
-          "[skinning][fit][slow]") {
+TEST_CASE(
+    "a part without an HRBF follows its own joint: the humanoid's toe bent 90 degrees, no worse than DQS",
+    "[skinning][fit][slow]") {
   SkinSetup setup;
   setup.operator_resolution = 64;
   setup.operator_slices = 32;

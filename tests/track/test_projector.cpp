@@ -16,7 +16,6 @@ using isokit::test::capsule_mesh;
 
 namespace {
 
-
 /// Synthetic field for the contact rule: f = 0.5 - 0.1 z (iso 0.5 at z = 0), whose reported
 /// gradient direction is turned by `turn` radians about y below z = 0.5.
 FieldFunction turning_field(float turn) {

@@ -21,7 +21,6 @@ using isokit::test::capsule_mesh;
 
 namespace {
 
-
 float smoothstep(float a, float b, float x) {
   const float t = std::clamp((x - a) / (b - a), 0.f, 1.f);
   return t * t * (3.f - 2.f * t);

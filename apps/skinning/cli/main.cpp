@@ -102,15 +102,18 @@ void print_fit(const FittedRig& fitted) {
       std::printf("  %-24s %8d %-11s %8.3g %3d  %6.2f / %-6.2f %6.2f / %-6.2f %5.2f %5.2f  %d / %d\n", name,
                   b.vertices, to_string(b.rule), b.fit.r, b.fit.closure_points, d.to_surface_p95 * pct,
                   d.to_surface_max * pct, d.from_surface_p95 * pct, d.from_surface_max * pct,
-                  d.to_surface_max / p->r, d.from_surface_max / p->r, p->coverage.related, p->coverage.unrelated);
+                  d.to_surface_max / p->r, d.from_surface_max / p->r, p->coverage.related,
+                  p->coverage.unrelated);
     } else {
-      const std::string to = b.merged_into >= 0 ? " -> " + rig.joints[static_cast<std::size_t>(b.merged_into)].name : "";
+      const std::string to =
+          b.merged_into >= 0 ? " -> " + rig.joints[static_cast<std::size_t>(b.merged_into)].name : "";
       std::printf("  %-24s %8d %-11s%s\n", name, b.vertices, to_string(b.rule), to.c_str());
       if (b.rule != FitRule::no_vertices) std::printf("  %-24s   (%s)\n", "", b.error.c_str());
     }
   }
   std::printf(
-      "  worst part: vertex->surface p95 %.2f %%, max %.2f %%; surface->vertex p95 %.2f %%, max %.2f %% of the\n"
+      "  worst part: vertex->surface p95 %.2f %%, max %.2f %%; surface->vertex p95 %.2f %%, max %.2f %% of "
+      "the\n"
       "  diagonal (%.4g); unrelated vertices inside primitives at rest: %d\n"
       "  (cl: closure points; related: vertices of the primitives next to it in the tree; unrelated: of any\n"
       "   other joint; many unrelated vertices mean a primitive reaching where it should not)\n",

@@ -16,7 +16,8 @@ void part_triangles(const Rig& r, const std::vector<int>& partition, int j, std:
                     std::vector<std::array<int, 3>>& triangles) {
   std::vector<int> local(static_cast<std::size_t>(r.rest.rows()), -1);
   for (Eigen::Index f = 0; f < r.triangles.rows(); ++f) {
-    const int a = partition[r.triangles(f, 0)], b = partition[r.triangles(f, 1)], c = partition[r.triangles(f, 2)];
+    const int a = partition[r.triangles(f, 0)], b = partition[r.triangles(f, 1)],
+              c = partition[r.triangles(f, 2)];
     if (((b == c) ? b : a) != j) continue;
     std::array<int, 3> t{};
     for (int k = 0; k < 3; ++k) {
@@ -44,8 +45,12 @@ double worst(const FitQuality& q, double implicit::FitDistances::*member) {
 
 }  // namespace
 
-double FitQuality::worst_to_surface_p95() const { return worst(*this, &implicit::FitDistances::to_surface_p95); }
-double FitQuality::worst_to_surface_max() const { return worst(*this, &implicit::FitDistances::to_surface_max); }
+double FitQuality::worst_to_surface_p95() const {
+  return worst(*this, &implicit::FitDistances::to_surface_p95);
+}
+double FitQuality::worst_to_surface_max() const {
+  return worst(*this, &implicit::FitDistances::to_surface_max);
+}
 double FitQuality::worst_from_surface_p95() const {
   return worst(*this, &implicit::FitDistances::from_surface_p95);
 }
@@ -86,7 +91,10 @@ FitQuality fit_quality(const FittedRig& fitted, const implicit::FitDistanceOptio
     part_triangles(r, fitted.partition(), b.joint, vertices, triangles);
     q.distances = implicit::fit_distances(
         *b.fit.field(), b.fit.local_to_world, vertices, triangles,
-        [&](const Vec3d& w) { return std::any_of(related.begin(), related.end(), [&](const BonePart* o) { return inside(*o, w); }); },
+        [&](const Vec3d& w) {
+          return std::any_of(related.begin(), related.end(),
+                             [&](const BonePart* o) { return inside(*o, w); });
+        },
         options);
     out.parts.push_back(q);
   }

@@ -145,7 +145,9 @@ bool merge_failed_fits(const Rig& r, std::vector<BonePart>& bones, std::vector<i
       const int a = partition[r.triangles(f, k)], b = partition[r.triangles(f, (k + 1) % 3)];
       if (a != b) touching.insert({std::min(a, b), std::max(a, b)});
     }
-  auto can_take = [&](int t, int j) { return bones[t].fitted && touching.count({std::min(t, j), std::max(t, j)}) > 0; };
+  auto can_take = [&](int t, int j) {
+    return bones[t].fitted && touching.count({std::min(t, j), std::max(t, j)}) > 0;
+  };
   std::vector<int> target(static_cast<std::size_t>(nj), -1);
   for (int j = 0; j < nj; ++j) {
     if (bones[j].fitted || bones[j].vertices == 0) continue;
@@ -374,7 +376,8 @@ bool fit_joint(const JointParts& parts, const SkinSetup& setup, int j, bool refi
 /// Step 3 (docs/skinning.md, "No vertex without a field"): a capsule fitted to joint `j`'s part
 /// (libimplicit `fit_capsule`), kept when `max_p95_over_r` is 0 or when its vertex → surface p95
 /// is at most `max_p95_over_r` times its radius. \return whether `b` took it.
-bool fit_fallback(const JointParts& parts, const SkinSetup& setup, int j, double max_p95_over_r, BonePart& b) {
+bool fit_fallback(const JointParts& parts, const SkinSetup& setup, int j, double max_p95_over_r,
+                  BonePart& b) {
   const Rig& r = parts.rig;
   implicit::MeshPart part = part_mesh(parts, j, r.name + ": joint '" + r.joints[j].name + "'");
   if (part.vertices.empty())
@@ -390,8 +393,8 @@ bool fit_fallback(const JointParts& parts, const SkinSetup& setup, int j, double
     return false;
   }
   if (max_p95_over_r > 0 &&
-      !(implicit::fit_distances(*fit.field(), fit.local_to_world, part.vertices, part.triangles).to_surface_p95 <=
-        max_p95_over_r * fit.r))
+      !(implicit::fit_distances(*fit.field(), fit.local_to_world, part.vertices, part.triangles)
+            .to_surface_p95 <= max_p95_over_r * fit.r))
     return false;
   b.fit = fit;
   b.start = seg0;
@@ -544,13 +547,20 @@ std::vector<PrimitiveCoverage> primitive_coverage(const FittedRig& fitted) {
 
 const char* to_string(FitRule rule) {
   switch (rule) {
-    case FitRule::no_vertices: return "no vertices";
-    case FitRule::hrbf: return "hrbf";
-    case FitRule::hrbf_strict: return "hrbf strict";
-    case FitRule::hrbf_open: return "hrbf open";
-    case FitRule::shared: return "shared";
-    case FitRule::capsule: return "capsule";
-    case FitRule::none: return "none";
+    case FitRule::no_vertices:
+      return "no vertices";
+    case FitRule::hrbf:
+      return "hrbf";
+    case FitRule::hrbf_strict:
+      return "hrbf strict";
+    case FitRule::hrbf_open:
+      return "hrbf open";
+    case FitRule::shared:
+      return "shared";
+    case FitRule::capsule:
+      return "capsule";
+    case FitRule::none:
+      return "none";
   }
   return "?";
 }

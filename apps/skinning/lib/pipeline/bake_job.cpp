@@ -163,7 +163,8 @@ void check_device(Device device) {
   if (device == Device::kCpu) return;
 #if defined(ISOKIT_HAVE_CUDA)
   if (!implicit::cuda::device_available())
-    throw InputError("--device cuda: no usable CUDA device (the CUDA runtime reports none); use --device cpu");
+    throw InputError(
+        "--device cuda: no usable CUDA device (the CUDA runtime reports none); use --device cpu");
   throw InputError(
       "--device cuda: this build has no device tracker yet (only the device field evaluation; "
       "docs/skinning.md, \"Devices\"); use --device cpu");

@@ -199,10 +199,10 @@ std::unique_ptr<track::IsoSurfaceTracker> make_tracker(const Skinner& sk, const 
   if (setup.fold_repair_min_part_vertices > 0) {
     std::vector<std::uint8_t> movable(static_cast<std::size_t>(nv));
     for (int v = 0; v < nv; ++v)
-      movable[v] =
-          sk.fitted().bones()[static_cast<std::size_t>(partition[v])].vertices >= setup.fold_repair_min_part_vertices
-              ? 1
-              : 0;
+      movable[v] = sk.fitted().bones()[static_cast<std::size_t>(partition[v])].vertices >=
+                           setup.fold_repair_min_part_vertices
+                       ? 1
+                       : 0;
     tracker->set_fold_repair_mask(std::move(movable));
   }
   return tracker;
@@ -308,8 +308,9 @@ void start_bake(Skinner& sk, Method method, const BakeOptions& options, BakeStat
 }
 
 /// A frame's metrics (Skinner::measure).
-FrameMetrics measure_frame(Skinner& sk, const Pose& pose, const track::Positions& pos, const BakeOptions& options,
-                           const std::vector<std::uint8_t>* contact, const track::IsoSurfaceTracker* tracker) {
+FrameMetrics measure_frame(Skinner& sk, const Pose& pose, const track::Positions& pos,
+                           const BakeOptions& options, const std::vector<std::uint8_t>* contact,
+                           const track::IsoSurfaceTracker* tracker) {
   // The iso residual leaves out the method's contact vertices and, with the tracker, the vertices
   // it smoothed (β > 0).
   std::vector<std::uint8_t> excluded;
@@ -343,7 +344,8 @@ BakeResult Skinner::bake(Method method, const std::vector<Pose>& poses, const Ba
       out.worst = f == 0 ? st.metrics : worst_of(out.worst, st.metrics);
     }
     if (progress_)
-      progress_(std::string("bake ") + to_string(method), static_cast<int>(f + 1), static_cast<int>(poses.size()));
+      progress_(std::string("bake ") + to_string(method), static_cast<int>(f + 1),
+                static_cast<int>(poses.size()));
     out.frames.push_back(std::move(pos));
     out.stats.push_back(st);
   }

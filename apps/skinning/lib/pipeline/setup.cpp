@@ -107,10 +107,12 @@ void read_joints(const json& js, const std::string& source, SkinSetup& s) {
 
 /// Section `fit`: the HRBF fit of each part (implicit::PartFitOptions).
 void read_fit(const json& f, const std::string& w, implicit::PartFitOptions& fit, double& capsule_match) {
-  check_keys(f, {"samples", "cull_h", "grid_resolution", "seed", "grid", "opening_offset", "capsule_match"}, w);
+  check_keys(f, {"samples", "cull_h", "grid_resolution", "seed", "grid", "opening_offset", "capsule_match"},
+             w);
   read(f, "capsule_match", capsule_match, w);
   require(std::isfinite(capsule_match) && capsule_match >= 0 && capsule_match <= 10, w + ".capsule_match",
-          "must be in [0, 10] (got " + format_number(capsule_match) + ")", "use 0 (off, the default) or e.g. 0.5");
+          "must be in [0, 10] (got " + format_number(capsule_match) + ")",
+          "use 0 (off, the default) or e.g. 0.5");
   read(f, "samples", fit.target_samples, w);
   read(f, "cull_h", fit.cull_h, w);
   read(f, "grid_resolution", fit.grid_resolution, w);

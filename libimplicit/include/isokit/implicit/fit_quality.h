@@ -36,8 +36,8 @@ struct FitDistanceOptions {
 
 /// Distances in the units of the vertices (world). p95: the 95th percentile (nearest rank).
 struct FitDistances {
-  int vertices{0};        ///< part vertices measured
-  int surface_points{0};  ///< iso-surface points measured (after the exclusions)
+  int vertices{0};                                  ///< part vertices measured
+  int surface_points{0};                            ///< iso-surface points measured (after the exclusions)
   double to_surface_p95{0}, to_surface_max{0};      ///< vertex → 0.5 iso-surface
   double from_surface_p95{0}, from_surface_max{0};  ///< iso-surface point → nearest part triangle
 };
@@ -46,7 +46,8 @@ struct FitDistances {
 /// `vertices` / `triangles` (world; `triangles` index `vertices`). `exclude(world point)` true
 /// leaves an iso-surface point out of the surface → vertices distances.
 /// \throw InputError for options out of range or triangle indices out of range.
-FitDistances fit_distances(const Field& field, const Rigid3d& local_to_world, const std::vector<Vec3d>& vertices,
+FitDistances fit_distances(const Field& field, const Rigid3d& local_to_world,
+                           const std::vector<Vec3d>& vertices,
                            const std::vector<std::array<int, 3>>& triangles,
                            const std::function<bool(const Vec3d&)>& exclude = {},
                            const FitDistanceOptions& options = {});

@@ -24,8 +24,8 @@ struct PartQuality {
 };
 
 struct FitQuality {
-  double diagonal{0};             ///< the rest mesh's bounding-box diagonal
-  int vertices_without_field{0};  ///< rest vertices whose partition joint has no primitive
+  double diagonal{0};              ///< the rest mesh's bounding-box diagonal
+  int vertices_without_field{0};   ///< rest vertices whose partition joint has no primitive
   std::vector<PartQuality> parts;  ///< one per joint with a primitive, in joint order
   /// Worst part values, relative to the diagonal (infinite when a part has no 0.5 level).
   double worst_to_surface_p95() const;
