@@ -7,7 +7,9 @@
 #include <memory>
 #include <string>
 
+#include "fit_caps.h"
 #include "isokit/core/error.h"
+#include "isokit/implicit/fit_quality.h"
 
 namespace isokit::implicit {
 
@@ -57,13 +59,11 @@ FieldPtr FittedPart::field() const {
   return local;
 }
 
-Rigid3d bone_frame(const Vec3d& a, const Vec3d& b) {
-  const Vec3d ez = (b - a) / norm(b - a);
-  // x: the world axis least aligned with the bone, made orthogonal.
-  const Vec3d pick = std::abs(ez.x) <= std::abs(ez.y) && std::abs(ez.x) <= std::abs(ez.z)
-                         ? Vec3d{1, 0, 0}
-                         : (std::abs(ez.y) <= std::abs(ez.z) ? Vec3d{0, 1, 0} : Vec3d{0, 0, 1});
-  Vec3d ex = pick - ez * dot(pick, ez);
+namespace {
+
+/// The frame with origin `a`, z along `b − a` and x along `x` made orthogonal to z.
+Rigid3d frame_from(const Vec3d& a, const Vec3d& ez, const Vec3d& x) {
+  Vec3d ex = x - ez * dot(x, ez);
   ex = ex / norm(ex);
   const Vec3d ey = cross(ez, ex);
   Rigid3d xf;
@@ -74,6 +74,28 @@ Rigid3d bone_frame(const Vec3d& a, const Vec3d& b) {
   }
   xf.t = a;
   return xf;
+}
+
+}  // namespace
+
+Rigid3d bone_frame(const Vec3d& a, const Vec3d& b) {
+  const Vec3d ez = (b - a) / norm(b - a);
+  // x: the world axis least aligned with the bone, made orthogonal.
+  const Vec3d pick = std::abs(ez.x) <= std::abs(ez.y) && std::abs(ez.x) <= std::abs(ez.z)
+                         ? Vec3d{1, 0, 0}
+                         : (std::abs(ez.y) <= std::abs(ez.z) ? Vec3d{0, 1, 0} : Vec3d{0, 0, 1});
+  return frame_from(a, ez, pick);
+}
+
+Rigid3d bone_frame(const Vec3d& a, const Vec3d& b, const std::vector<Vec3d>& vertices) {
+  const Vec3d ez = (b - a) / norm(b - a);
+  double far = 0;
+  for (const Vec3d& p : vertices) far = std::max(far, norm((p - a) - ez * dot(p - a, ez)));
+  for (const Vec3d& p : vertices) {
+    const Vec3d radial = (p - a) - ez * dot(p - a, ez);
+    if (far > 0 && norm(radial) >= (1 - 1e-4) * far) return frame_from(a, ez, radial);
+  }
+  return bone_frame(a, b);
 }
 
 namespace {
@@ -96,6 +118,8 @@ void validate_options(const PartFitOptions& o, const std::string& name) {
           "must be in [0, 0.5) (got " + format_number(o.cull_h) + ")", "use the default 0.05");
   require(o.opening_offset >= 0 && o.opening_offset <= 2, name + ": opening_offset",
           "must be in [0, 2] (got " + format_number(o.opening_offset) + ")", "use 0.1 (the default)");
+  require(o.cap_height >= 0 && o.cap_height <= 2, name + ": cap_height",
+          "must be in [0, 2] (got " + format_number(o.cap_height) + ")", "use 1 (the default)");
   require(o.support_margin > 0 && std::isfinite(o.support_margin), name + ": support_margin", "must be > 0",
           "use the default 1");
 }
@@ -247,6 +271,17 @@ void add_closure_points(const MeshPart& part, const LocalMesh& m, const PartFitO
   }
 }
 
+/// Border caps (`PartFitOptions::Closure::border_caps`), appended to `out.samples`: a dome over
+/// each open border loop of the part's triangles, its points about `spacing` apart.
+void add_border_caps(const MeshPart& part, const LocalMesh& m, const PartFitOptions& o, double spacing,
+                     FittedPart& out) {
+  for (const std::vector<int>& loop : detail::boundary_loops(part.triangles, int(m.v.size()))) {
+    const std::vector<HrbfSample> cap = detail::loop_cap(m.v, loop, o.cap_height, spacing, {0, 0, 1});
+    out.samples.insert(out.samples.end(), cap.begin(), cap.end());
+    out.closure_points += int(cap.size());
+  }
+}
+
 /// The compact field `t_r(d)` of the fitted HRBF into `out.local`, `out.r` = the largest distance
 /// from the bone segment to a sample. Support box: the samples' box grown by margin × r, grown
 /// further (up to 8×) until d >= r on all its faces (d is not a true distance: |∇d| may fall
@@ -275,14 +310,12 @@ void compact_field(const std::shared_ptr<const Hrbf>& hrbf, double len, const Pa
           "check the part's samples and normals");
 }
 
-}  // namespace
-
-FittedPart fit_part(const MeshPart& part, const PartFitOptions& o) {
+/// One fit with one closure rule (`o.closure` is `joints` or `border_caps`).
+FittedPart fit_part_closed(const MeshPart& part, const PartFitOptions& o) {
   const std::string& name = part.name;
-  validate_options(o, name);
   const double len = checked_bone_length(part);
   FittedPart out;
-  out.local_to_world = bone_frame(part.bone_start, part.bone_end);
+  out.local_to_world = bone_frame(part.bone_start, part.bone_end, part.vertices);
   const LocalMesh mesh = local_mesh(part, out.local_to_world, len);
   const std::size_t ncand = std::size_t(o.target_samples) * std::size_t(o.candidates_per_sample);
   const std::vector<HrbfSample> cand = candidates(part, mesh, o, ncand);
@@ -292,7 +325,12 @@ FittedPart fit_part(const MeshPart& part, const PartFitOptions& o) {
   for (std::size_t i : poisson_disk(cand, std::size_t(o.target_samples), kept_area))
     out.samples.push_back(cand[i]);
   require_outward(out.samples, len, name);
-  add_closure_points(part, mesh, o, out);
+  if (o.closure == PartFitOptions::Closure::joints) {
+    add_closure_points(part, mesh, o, out);
+  } else {
+    const double spacing = std::sqrt(kept_area / double(std::max<std::size_t>(out.samples.size(), 1)));
+    add_border_caps(part, mesh, o, spacing, out);
+  }
   compact_field(std::make_shared<const Hrbf>(out.samples, o.hrbf, name), len, o, name, out);
   if (o.sample_grid) {
     GridFieldOptions go;
@@ -300,6 +338,50 @@ FittedPart fit_part(const MeshPart& part, const PartFitOptions& o) {
     out.grid = std::make_shared<const GridField>(*out.local, out.local->support(), go);
   }
   return out;
+}
+
+/// The score `Closure::best` compares: vertex → surface plus surface → part p95, the part closed
+/// by a flat fan over each border loop (world units).
+double closed_fit_score(const FittedPart& fit, const MeshPart& part) {
+  std::vector<Vec3d> v = part.vertices;
+  std::vector<std::array<int, 3>> t = part.triangles;
+  detail::close_with_fans(v, t);
+  FitDistanceOptions fo;
+  fo.resolution = 24;
+  const FitDistances d = fit_distances(*fit.field(), fit.local_to_world, v, t, {}, fo);
+  return d.to_surface_p95 + d.from_surface_p95;
+}
+
+}  // namespace
+
+FittedPart fit_part(const MeshPart& part, const PartFitOptions& o) {
+  validate_options(o, part.name);
+  if (o.closure != PartFitOptions::Closure::best) {
+    FittedPart out = fit_part_closed(part, o);
+    out.error = closed_fit_score(out, part);
+    return out;
+  }
+  PartFitOptions oj = o, oc = o;
+  oj.closure = PartFitOptions::Closure::joints;
+  oc.closure = PartFitOptions::Closure::border_caps;
+  FittedPart joints, caps;
+  std::string error;
+  try {
+    joints = fit_part_closed(part, oj);
+  } catch (const InputError& e) {
+    error = e.what();
+  }
+  try {
+    caps = fit_part_closed(part, oc);
+  } catch (const InputError&) {
+    if (!joints.local) throw InputError(error);
+    joints.error = closed_fit_score(joints, part);
+    return joints;
+  }
+  caps.error = closed_fit_score(caps, part);
+  if (!joints.local) return caps;
+  joints.error = closed_fit_score(joints, part);
+  return caps.error < joints.error ? caps : joints;
 }
 
 std::vector<FittedPart> fit_parts(const std::vector<MeshPart>& parts, const PartFitOptions& options,

@@ -203,9 +203,11 @@ TEST_CASE("a fitted limb part closes smoothly at its joint", "[fit]") {
   for (int i = 0; i <= 15; ++i) prof.push_back({L * i / 15, R});
   const MeshPart part = revolve(prof, {0, 0, 0}, {0, 0, L}, 24, false, false, {}, {});
   double worst_closed = 0, worst_open = 0;
-  PartFitOptions open_opts;
+  PartFitOptions paper;  // the paper's closure points (the default picks caps or these by error)
+  paper.closure = PartFitOptions::Closure::joints;
+  PartFitOptions open_opts = paper;
   open_opts.close_start = false;
-  const FittedPart closed = fit_part(part);
+  const FittedPart closed = fit_part(part, paper);
   const FittedPart open = fit_part(part, open_opts);
   for (int i = 0; i <= 40; ++i) {
     const double th = 0.5 * kPi + 0.5 * kPi * i / 40;  // from the side (90°) to the axis (180°)
@@ -235,6 +237,7 @@ TEST_CASE("openings close a part's holes at their joints (branching parts)", "[f
   part.openings = {{a, axis * -1.0}, {b, axis}};
   for (double k : {0.1, 0.5, 1.0}) {
     PartFitOptions o;
+    o.closure = PartFitOptions::Closure::joints;
     o.close_start = o.close_end = false;
     o.opening_offset = k;
     const FittedPart fp = fit_part(part, o);
@@ -253,6 +256,7 @@ TEST_CASE("openings close a part's holes at their joints (branching parts)", "[f
     CHECK(fp.local->eval_d(fp.local_to_world.apply_inverse(mid)).value > 0.9);
   }
   PartFitOptions o;
+  o.closure = PartFitOptions::Closure::joints;
   o.close_start = o.close_end = false;
   MeshPart bad = part;
   bad.openings[1].direction = {0, 0, 0};

@@ -50,6 +50,33 @@ Rig blade_rig() {
   return r;
 }
 
+/// The capsule rig with a third joint "Patch" under Bone1 that dominates a one-sided patch of
+/// the tube (x > 0.12, 1.3 < y < 1.9): a part that is no limb, as a heat-weighted partition of a
+/// real rig gives (CesiumMan's waist strip, a Testwuson back part holed by its neighbours).
+Rig patch_rig() {
+  Rig r = testing::capsule_rig();
+  r.joints.push_back(
+      {"Patch", 1, Affine(Eigen::Translation3d(0, 0.5, 0)), Affine(Eigen::Translation3d(0, -1.5, 0))});
+  SkinWeights w;
+  w.offsets.push_back(0);
+  for (Eigen::Index v = 0; v < r.rest.rows(); ++v) {
+    const float x = r.rest(v, 0), y = r.rest(v, 1);
+    if (x > -0.1f && y > 1.45f && y < 1.56f) {
+      w.joints.push_back(2);
+      w.weights.push_back(1.f);
+    } else {
+      for (int k = r.weights.offsets[static_cast<std::size_t>(v)];
+           k < r.weights.offsets[static_cast<std::size_t>(v) + 1]; ++k) {
+        w.joints.push_back(r.weights.joints[static_cast<std::size_t>(k)]);
+        w.weights.push_back(r.weights.weights[static_cast<std::size_t>(k)]);
+      }
+    }
+    w.offsets.push_back(static_cast<int>(w.joints.size()));
+  }
+  r.weights = w;
+  return r;
+}
+
 }  // namespace
 
 TEST_CASE("fit quality: the capsule rig's primitives match their parts both ways", "[skinning][fit]") {
@@ -125,4 +152,37 @@ TEST_CASE(
   INFO("edge distortion max: dqs " << dqs.worst.edge_distortion_max << ", tracking2014 "
                                    << trk.worst.edge_distortion_max);
   CHECK(trk.worst.edge_distortion_max <= dqs.worst.edge_distortion_max);
+}
+
+TEST_CASE("a poor fit counts as failed: a patch that is no limb shares its neighbour's primitive",
+          "[skinning][fit]") {
+  SkinSetup paper;
+  paper.max_fit_error = 0;
+  const FittedRig kept(patch_rig(), paper);
+  const BonePart& patch = kept.bones()[2];
+  INFO("max_error 0: rule " << to_string(patch.rule) << ", fit error " << patch.fit.error << ", r "
+                            << patch.fit.r << ", error " << patch.error);
+  REQUIRE(patch.fitted);
+  CHECK(patch.fit.error > patch.fit.r);  // the patch's own HRBF bulges out of it
+  const FitQuality qk = fit_quality(kept);
+
+  const FittedRig fitted(patch_rig(), SkinSetup{});
+  const BonePart& shared = fitted.bones()[2];
+  const BonePart& limb = fitted.bones()[1];
+  INFO("default: rule " << to_string(shared.rule) << ", error " << shared.error << "; Bone1: rule "
+                        << to_string(limb.rule) << ", fit error " << limb.fit.error << ", r " << limb.fit.r);
+  CHECK(shared.rule == FitRule::shared);
+  CHECK(shared.merged_into == 1);
+  // The limb, holed by the patch, failed too (its own HRBF is no better); with the patch's
+  // vertices back it is a whole tube and fits.
+  CHECK(limb.rule == FitRule::hrbf);
+  CHECK(limb.fit.error <= limb.fit.r);
+  CHECK_THAT(shared.error, Catch::Contains("poor fit") && Catch::Contains("fit.max_error"));
+  const FitQuality q = fit_quality(fitted);
+  CHECK(q.vertices_without_field == 0);
+  INFO("unrelated inside: kept " << qk.unrelated_inside() << ", shared " << q.unrelated_inside()
+                                 << "; worst surface -> vertex p95: kept " << qk.worst_from_surface_p95()
+                                 << ", shared " << q.worst_from_surface_p95());
+  CHECK(q.worst_from_surface_p95() < qk.worst_from_surface_p95());
+  CHECK(q.unrelated_inside() <= qk.unrelated_inside());
 }

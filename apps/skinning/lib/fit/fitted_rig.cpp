@@ -131,8 +131,9 @@ JointParts joint_parts(const Rig& r, const std::vector<Eigen::Vector3d>& jp,
 }
 
 /// Step 3, second pass (docs/skinning.md "Pipeline", 3): the vertices of every joint whose fit
-/// failed go to a fitted neighbour whose part touches its part (the parent, else the child with
-/// most vertices), which is marked in `refit`. \return false when no vertex moved (nothing to refit).
+/// failed go to a neighbour whose part touches its part (the parent, else the child with most
+/// vertices) that is fitted, or failed but larger, which is marked in `refit`. \return false
+/// when no vertex moved (nothing to refit).
 bool merge_failed_fits(const Rig& r, std::vector<BonePart>& bones, std::vector<int>& partition,
                        std::vector<char>& refit) {
   const int nv = static_cast<int>(r.rest.rows());
@@ -145,12 +146,21 @@ bool merge_failed_fits(const Rig& r, std::vector<BonePart>& bones, std::vector<i
       const int a = partition[r.triangles(f, k)], b = partition[r.triangles(f, (k + 1) % 3)];
       if (a != b) touching.insert({std::min(a, b), std::max(a, b)});
     }
-  auto can_take = [&](int t, int j) {
-    return bones[t].fitted && touching.count({std::min(t, j), std::max(t, j)}) > 0;
-  };
+  // Smallest failed parts first. A failed neighbour larger than the part can take it too and is
+  // refitted instead of merged (a patch of a neighbour's skin holes a limb: both fits fail, and
+  // the limb with its patch back fits); a joint that takes vertices is not merged in this pass.
+  std::vector<int> failed;
+  for (int j = 0; j < nj; ++j)
+    if (!bones[j].fitted && bones[j].vertices > 0) failed.push_back(j);
+  std::stable_sort(failed.begin(), failed.end(),
+                   [&](int a, int b) { return bones[a].vertices < bones[b].vertices; });
   std::vector<int> target(static_cast<std::size_t>(nj), -1);
-  for (int j = 0; j < nj; ++j) {
-    if (bones[j].fitted || bones[j].vertices == 0) continue;
+  auto can_take = [&](int t, int j) {
+    if (target[t] >= 0 || touching.count({std::min(t, j), std::max(t, j)}) == 0) return false;
+    return bones[t].fitted || bones[t].vertices > bones[j].vertices;
+  };
+  for (int j : failed) {
+    if (refit[j]) continue;  // takes a smaller part's vertices: refitted, not merged
     int t = r.joints[j].parent;
     if (t < 0 || !can_take(t, j)) {
       t = -1;
@@ -310,8 +320,10 @@ std::pair<Eigen::Vector3d, Eigen::Vector3d> place_bone_segment(const JointParts&
 /// Heat weights have no visibility term, so a partition may hold patches of a neighbouring
 /// surface facing the bone (armpit, crotch); an HRBF through them has spurious far-field inside
 /// regions. Triangles facing the bone are dropped, more strictly on each retry, and the last try
-/// also drops the closure points. Sets `b.fit` and `b.fitted`, or `b.error` (the first try's).
-void fit_with_retries(implicit::MeshPart& part, const implicit::PartFitOptions& o,
+/// also drops the closure points. A fit whose error is above `max_error × r` (0: never;
+/// SkinSetup::max_fit_error) counts as failed. Sets `b.fit` and `b.fitted`, or `b.error` (the
+/// first try's).
+void fit_with_retries(implicit::MeshPart& part, const implicit::PartFitOptions& o, double max_error,
                       const Eigen::Vector3d& seg0, const Eigen::Vector3d& seg1, BonePart& b) {
   const Eigen::Vector3d axis = seg1 - seg0;
   auto facing = [&](const std::array<int, 3>& t) {
@@ -333,10 +345,19 @@ void fit_with_retries(implicit::MeshPart& part, const implicit::PartFitOptions& 
     for (const auto& t : all)
       if (facing(t) > thresholds[attempt]) part.triangles.push_back(t);
     implicit::PartFitOptions oa = o;
-    if (attempt == 2) oa.close_start = oa.close_end = false;
-    if (attempt == 2) part.openings.clear();
+    if (attempt == 2) {  // no closure at all
+      oa.closure = implicit::PartFitOptions::Closure::joints;
+      oa.close_start = oa.close_end = false;
+      part.openings.clear();
+    }
     try {
       b.fit = implicit::fit_part(part, oa);
+      if (max_error > 0 && !(b.fit.error <= max_error * b.fit.r)) {  // a poor fit counts as failed
+        if (attempt == 0)
+          b.error = "poor fit: error " + format_number(b.fit.error) + " above " + format_number(max_error) +
+                    " r = " + format_number(max_error * b.fit.r) + " (setup key fit.max_error)";
+        continue;
+      }
       b.fitted = true;
       b.error.clear();
       b.rule = attempt == 0 ? FitRule::hrbf : attempt == 1 ? FitRule::hrbf_strict : FitRule::hrbf_open;
@@ -369,7 +390,7 @@ bool fit_joint(const JointParts& parts, const SkinSetup& setup, int j, bool refi
   const auto [seg0, seg1] = place_bone_segment(parts, j, refit, part, o);
   b.start = seg0;
   b.end = seg1;
-  fit_with_retries(part, o, seg0, seg1, b);
+  fit_with_retries(part, o, setup.max_fit_error, seg0, seg1, b);
   return true;
 }
 

@@ -106,13 +106,20 @@ void read_joints(const json& js, const std::string& source, SkinSetup& s) {
 }
 
 /// Section `fit`: the HRBF fit of each part (implicit::PartFitOptions).
-void read_fit(const json& f, const std::string& w, implicit::PartFitOptions& fit, double& capsule_match) {
-  check_keys(f, {"samples", "cull_h", "grid_resolution", "seed", "grid", "opening_offset", "capsule_match"},
+void read_fit(const json& f, const std::string& w, implicit::PartFitOptions& fit, double& capsule_match,
+              double& max_fit_error) {
+  check_keys(f,
+             {"samples", "cull_h", "grid_resolution", "seed", "grid", "opening_offset", "closure",
+              "cap_height", "capsule_match", "max_error"},
              w);
   read(f, "capsule_match", capsule_match, w);
   require(std::isfinite(capsule_match) && capsule_match >= 0 && capsule_match <= 10, w + ".capsule_match",
           "must be in [0, 10] (got " + format_number(capsule_match) + ")",
           "use 0 (off, the default) or e.g. 0.5");
+  read(f, "max_error", max_fit_error, w);
+  require(std::isfinite(max_fit_error) && max_fit_error >= 0 && max_fit_error <= 100, w + ".max_error",
+          "must be in [0, 100] (got " + format_number(max_fit_error) + ")",
+          "use 1 (the default) or 0 (off: keep every fit that solves)");
   read(f, "samples", fit.target_samples, w);
   read(f, "cull_h", fit.cull_h, w);
   read(f, "grid_resolution", fit.grid_resolution, w);
@@ -121,6 +128,17 @@ void read_fit(const json& f, const std::string& w, implicit::PartFitOptions& fit
   read(f, "opening_offset", fit.opening_offset, w);
   require(fit.opening_offset >= 0 && fit.opening_offset <= 2, w + ".opening_offset",
           "must be in [0, 2] (got " + format_number(fit.opening_offset) + ")", "use 0.1 (the default)");
+  if (f.contains("closure")) {
+    const json& c = f.at("closure");
+    require(c.is_string() && (c == "best" || c == "joints" || c == "border_caps"), w + ".closure",
+            "must be \"best\", \"joints\" or \"border_caps\" (got " + c.dump() + ")",
+            "use \"best\" (the default) or \"joints\" (2013 §4.1)");
+    using Closure = implicit::PartFitOptions::Closure;
+    fit.closure = c == "joints" ? Closure::joints : c == "border_caps" ? Closure::border_caps : Closure::best;
+  }
+  read(f, "cap_height", fit.cap_height, w);
+  require(std::isfinite(fit.cap_height) && fit.cap_height >= 0 && fit.cap_height <= 2, w + ".cap_height",
+          "must be in [0, 2] (got " + format_number(fit.cap_height) + ")", "use 1 (the default)");
   require(fit.target_samples >= 4 && fit.target_samples <= 2000, w + ".samples", "must be in [4, 2000]",
           "the paper uses 50");
   require(fit.grid_resolution >= 4 && fit.grid_resolution <= 256, w + ".grid_resolution",
@@ -257,7 +275,7 @@ SkinSetup setup_from_json(const std::string& text, const std::string& source) {
   read(j, "default_operator", def, source);
   s.default_operator = joint_operator_from_string(def, source + ".default_operator");
   if (j.contains("joints")) read_joints(j.at("joints"), source, s);
-  if (j.contains("fit")) read_fit(j.at("fit"), source + ".fit", s.fit, s.capsule_match);
+  if (j.contains("fit")) read_fit(j.at("fit"), source + ".fit", s.fit, s.capsule_match, s.max_fit_error);
   if (j.contains("operators")) read_operators(j.at("operators"), source + ".operators", s);
   if (j.contains("tracker")) read_tracker(j.at("tracker"), source + ".tracker", s);
   if (j.contains("projector")) read_projector(j.at("projector"), source + ".projector", s.projector);

@@ -58,6 +58,24 @@ struct PartFitOptions {
   /// the papers, which close bone ends at `s`: a branching part's cap at `s` reaches into its
   /// children and makes contact with them at rest; docs/skinning.md, "fitting").
   double opening_offset = 0.1;
+  /// How the fit closes the part where its mesh is open (at its joints, or an open border):
+  /// - `joints` (2013 §4.1, Fig. 3): one point on the bone axis `s` beyond each closed bone end
+  ///   (`close_start`, `close_end`) and one per `MeshPart::openings`;
+  /// - `border_caps` (not in the papers): a dome of samples over each open border loop of the
+  ///   part's triangles (`cap_height`), so the surface closes where the part's mesh ends,
+  ///   whatever the joints' places; a part without a border gets no closure; `close_start`,
+  ///   `close_end` and `openings` are not used;
+  /// - `best` (default; not in the papers): both fits, and the one with the smaller vertex →
+  ///   surface plus surface → part p95 (fit_quality.h; the part closed by a flat fan over each
+  ///   border loop) is kept; where one of them throws, the other.
+  /// docs/skinning.md, "Decision: closing a part at its borders".
+  enum class Closure { joints, border_caps, best };
+  Closure closure = Closure::best;
+  /// Height of a border cap's dome over its loop, as a fraction of the loop's radius, in [0, 2]
+  /// (not in the papers; 1, a half sphere, like the paper's closure point `s` beyond a joint:
+  /// the cap reaches into the neighbour, so the blend at the joint does not dent; measured in
+  /// docs/skinning.md, "Decision: closing a part at its borders"). Default 1.
+  double cap_height = 1.0;
   /// Support box = the samples' box grown by `support_margin × r` (> 0; grown further, up to 8×,
   /// until the field vanishes on its faces). Not in the papers.
   double support_margin = 1.0;
@@ -67,7 +85,7 @@ struct PartFitOptions {
 };
 
 /// The fitted primitive. `local` is in the bone frame: origin `bone_start`, +z along the bone
-/// (x, y completed deterministically); `local_to_world` places it at rest.
+/// (x, y from the part's vertices, `bone_frame`); `local_to_world` places it at rest.
 struct FittedPart {
   std::shared_ptr<const HrbfField> local;
   std::shared_ptr<const GridField> grid;  ///< null unless `sample_grid`
@@ -75,12 +93,22 @@ struct FittedPart {
   double r{0};                      ///< t_r width: bone-to-farthest-sample distance
   std::vector<HrbfSample> samples;  ///< local frame, closure points last
   int closure_points{0};
+  /// How far the primitive is from its part (world units): vertex → surface p95 plus surface →
+  /// part p95 (fit_quality.h, 24³ lattice), the part closed by a flat fan over each border loop.
+  /// What `Closure::best` compares.
+  double error{0};
   /// The grid if sampled, else the HRBF field.
   FieldPtr field() const;
 };
 
-/// Bone frame used by `fit_part`: origin at `a`, z along `b − a`.
+/// Bone frame: origin at `a`, z along `b − a`, x along the world axis least aligned with the bone.
 Rigid3d bone_frame(const Vec3d& a, const Vec3d& b);
+/// Bone frame used by `fit_part`: origin at `a`, z along `b − a`, x towards the first of
+/// `vertices` (in their order) whose distance to the bone's line is within 1e-4 of the largest,
+/// so that the frame turns with the part: a rotated copy of a rig gets the rotated frames, and
+/// the same sampled grids (not in the papers; docs/skinning.md, "Units and axes"). Without such
+/// a vertex (all on the line), the world-axis rule above.
+Rigid3d bone_frame(const Vec3d& a, const Vec3d& b, const std::vector<Vec3d>& vertices);
 
 /// Fits one part. \throw InputError naming `part.name`: zero-length bone, empty part, indices
 /// out of range, non-finite vertices, fewer than 4 usable samples, inward-oriented triangles (the

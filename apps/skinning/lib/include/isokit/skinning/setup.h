@@ -83,6 +83,14 @@ struct SkinSetup {
   /// resort (not in the papers; docs/skinning.md, "No vertex without a field"). In [0, 10];
   /// default 0. Setup key `fit.capsule_match`.
   double capsule_match{0};
+  /// A part's HRBF whose error (`implicit::FittedPart::error`: vertex → surface plus surface →
+  /// part p95) is above this many times its radius `r` counts as a failed fit: the next triangle
+  /// filter is tried, then the part shares a touching neighbour's primitive, and the capsule is
+  /// the last resort. Such a fit (a patch that is no limb, a part of a few triangles) bulges out
+  /// of its part and holds other parts' vertices at rest. 0 = off (the papers: every fit that
+  /// solves is kept). Not in the papers (docs/skinning.md, "Decision: rejecting poor fits"). In
+  /// [0, 100]; default 1. Setup key `fit.max_error`.
+  double max_fit_error{1};
   int operator_resolution{128};  ///< grid operator resolution per axis, [8, 1024] (2014 §6.1: 128)
   int operator_slices{128};      ///< grid operator slices, [8, 1024] (2014 §6.1: 128)
   /// Caps a `bulge` joint's controller by the same controller of the joint's own bend angle β (the
