@@ -26,6 +26,8 @@ void add_options(CLI::App& app, isokit::eval::EvalOptions& a) {
   app.add_option("--fps", a.fps, "clip sampling rate")->capture_default_str()->check(CLI::PositiveNumber);
   app.add_option("--out", a.out, "output folder")->capture_default_str();
   app.add_option("--commit", a.commit, "commit recorded in the tables");
+  app.add_option("--setup", a.setup, "a setup file for every rig (isokit-skin --setup; default: none)")
+      ->check(CLI::ExistingFile);
   app.add_flag("!--no-render", a.render, "skip the contact sheets");
   app.add_flag("!--no-self-intersections", a.self_intersections, "skip the exact self-intersection counts");
 }

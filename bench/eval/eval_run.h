@@ -29,6 +29,9 @@ struct EvalOptions {
   double fps{30};  ///< clip sampling rate
   bool render{true}, self_intersections{true};
   std::string out{"out/eval"}, commit;
+  /// A setup file applied to every rig (isokit-skin's `--setup`; empty = the defaults): for
+  /// ablations and the papers' settings, never a per-rig setup.
+  std::string setup;
 };
 
 /// The rigs a run evaluates: `rigs`, the files of `folders`, filtered by `only`; with neither,
