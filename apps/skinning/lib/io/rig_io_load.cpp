@@ -844,30 +844,36 @@ void Loader::append_mesh(const MeshUse& m, bool weights, FileMesh& file) {
   if (weights) append_weights(m, local_to_out, file);
 }
 
-/// Appends the triangles of `m` and the vertices they use (in rig rest space); returns the
-/// mesh's vertex -> output vertex map (-1: unused).
+/// Appends the triangles of `m` and the vertices they use (in rig rest space, in the file's
+/// vertex order: a point cache of the output vertices fits the file); returns the mesh's
+/// vertex -> output vertex map (-1: unused).
 std::vector<int> Loader::append_triangles(const MeshUse& m, FileMesh& file) const {
   const aiMesh* mesh = m.mesh;
   std::vector<int> local_to_out(mesh->mNumVertices, -1);
   for (unsigned f = 0; f < mesh->mNumFaces; ++f) {
     const aiFace& face = mesh->mFaces[f];
     if (face.mNumIndices != 3) continue;
-    Eigen::Vector3i t;
     for (int k = 0; k < 3; ++k) {
       const unsigned v = face.mIndices[k];
       require(v < mesh->mNumVertices, path_ + ": mesh " + quote(m.name) + " face " + std::to_string(f),
               "vertex index out of range", "fix the mesh");
-      if (local_to_out[v] < 0) {
-        const Eigen::Vector3d p =
-            m.to_scene * Eigen::Vector3d(mesh->mVertices[v].x, mesh->mVertices[v].y, mesh->mVertices[v].z);
-        require(p.allFinite(), path_ + ": mesh " + quote(m.name) + " vertex " + std::to_string(v),
-                "position is not finite", "fix the mesh and export again");
-        local_to_out[v] = static_cast<int>(file.pos.size());
-        file.pos.push_back(p.cast<float>());
-      }
-      t[k] = local_to_out[v];
+      local_to_out[v] = 0;  // used
     }
-    file.tris.push_back(t);
+  }
+  for (unsigned v = 0; v < mesh->mNumVertices; ++v) {
+    if (local_to_out[v] < 0) continue;
+    const Eigen::Vector3d p =
+        m.to_scene * Eigen::Vector3d(mesh->mVertices[v].x, mesh->mVertices[v].y, mesh->mVertices[v].z);
+    require(p.allFinite(), path_ + ": mesh " + quote(m.name) + " vertex " + std::to_string(v),
+            "position is not finite", "fix the mesh and export again");
+    local_to_out[v] = static_cast<int>(file.pos.size());
+    file.pos.push_back(p.cast<float>());
+  }
+  for (unsigned f = 0; f < mesh->mNumFaces; ++f) {
+    const aiFace& face = mesh->mFaces[f];
+    if (face.mNumIndices == 3)
+      file.tris.emplace_back(local_to_out[face.mIndices[0]], local_to_out[face.mIndices[1]],
+                             local_to_out[face.mIndices[2]]);
   }
   return local_to_out;
 }

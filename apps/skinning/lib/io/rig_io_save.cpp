@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
-// Writers of the rig I/O: save_rig (skinned glTF 2.0), write_baked_glb (morph-target animation)
-// and write_ply. Own glTF writer (gltf_io.h); every file goes through a temporary file.
+// Writers of the rig I/O: save_rig (skinned glTF 2.0), write_baked_glb (morph-target animation),
+// write_pc2 (point cache) and write_ply. Own glTF writer (gltf_io.h); every file goes through a
+// temporary file.
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -336,12 +337,8 @@ void add_skin(gltf::Builder& b, const Rig& rig, const std::vector<int>& roots) {
   b.doc()["skins"] = json::array({skin});
 }
 
-/// Checks the arguments of write_baked_glb.
-void check_bake(const Rig& rig, const std::vector<track::Positions>& frames, double fps,
-                const std::string& path) {
-  require(gltf::extension(path) == ".glb", path, "extension must be .glb", "name the file *.glb");
-  require(fps > 0 && std::isfinite(fps), path + ": fps", "must be > 0 (got " + format_number(fps) + ")",
-          "pass the frame rate of the frames");
+/// Checks baked frames: at least one, each finite with the rig's welded vertex count.
+void check_frames(const Rig& rig, const std::vector<track::Positions>& frames, const std::string& path) {
   require(!frames.empty(), path + ": frames", "none given", "bake at least one frame");
   validate(rig);
   const Eigen::Index nw = rig.rest.rows();
@@ -352,6 +349,26 @@ void check_bake(const Rig& rig, const std::vector<track::Positions>& frames, dou
     require(frames[k].allFinite(), path + ": frame " + std::to_string(k), "has non-finite positions",
             "fix the deformation before baking");
   }
+}
+
+/// Checks the arguments of write_baked_glb.
+void check_bake(const Rig& rig, const std::vector<track::Positions>& frames, double fps,
+                const std::string& path) {
+  require(gltf::extension(path) == ".glb", path, "extension must be .glb", "name the file *.glb");
+  require(fps > 0 && std::isfinite(fps), path + ": fps", "must be > 0 (got " + format_number(fps) + ")",
+          "pass the frame rate of the frames");
+  check_frames(rig, frames, path);
+}
+
+/// Appends `u` to `buf` as 4 little-endian bytes.
+void put_u32(std::vector<char>& buf, std::uint32_t u) {
+  for (int b = 0; b < 4; ++b) buf.push_back(static_cast<char>((u >> (8 * b)) & 0xFF));
+}
+
+void put_f32(std::vector<char>& buf, float x) {
+  std::uint32_t u;
+  std::memcpy(&u, &x, 4);
+  put_u32(buf, u);
 }
 
 /// Adds morph-target delta accessors of `nout` VEC3: sparse when that is smaller than the dense
@@ -506,6 +523,33 @@ void write_baked_glb(const Rig& rig, const std::vector<track::Positions>& frames
   b.write(path, true);
 }
 
+void write_pc2(const Rig& rig, const std::vector<track::Positions>& frames, const std::string& path) {
+  require(gltf::extension(path) == ".pc2", path, "extension must be .pc2", "name the file *.pc2");
+  check_frames(rig, frames, path);
+  const OutputView out = output_view(rig, path);
+  const std::size_t nout = out.to_welded.size();
+  constexpr auto kMax = static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max());
+  require(nout <= kMax && frames.size() <= kMax, path, "has more points or frames than PC2's int32 counts",
+          "bake fewer frames");
+  write_stream_atomically(path, [&](std::ostream& stream) {
+    std::vector<char> buf;
+    const char signature[12] = "POINTCACHE2";  // 11 characters and the terminating zero
+    buf.insert(buf.end(), signature, signature + 12);
+    put_u32(buf, 1);                                          // version
+    put_u32(buf, static_cast<std::uint32_t>(nout));           // numPoints
+    put_f32(buf, 0.0f);                                       // startFrame
+    put_f32(buf, 1.0f);                                       // sampleRate: one sample per frame
+    put_u32(buf, static_cast<std::uint32_t>(frames.size()));  // numSamples
+    stream.write(buf.data(), static_cast<std::streamsize>(buf.size()));
+    for (const track::Positions& frame : frames) {
+      buf.clear();
+      for (const int w : out.to_welded)
+        for (int k = 0; k < 3; ++k) put_f32(buf, frame(w, k));
+      stream.write(buf.data(), static_cast<std::streamsize>(buf.size()));
+    }
+  });
+}
+
 void write_ply(const std::string& path, const track::Positions& positions,
                const track::Triangles& triangles) {
   const Eigen::Index nv = positions.rows();
@@ -519,21 +563,13 @@ void write_ply(const std::string& path, const track::Positions& positions,
         << "\nproperty list uchar int vertex_indices\nend_header\n";
     std::vector<char> buf;
     buf.reserve(static_cast<std::size_t>(std::max<Eigen::Index>(nv * 12, triangles.rows() * 13)));
-    auto put = [&](std::uint32_t u) {
-      for (int b = 0; b < 4; ++b) buf.push_back(static_cast<char>((u >> (8 * b)) & 0xFF));
-    };
     for (Eigen::Index v = 0; v < nv; ++v)
-      for (int k = 0; k < 3; ++k) {
-        std::uint32_t u;
-        const float x = positions(v, k);
-        std::memcpy(&u, &x, 4);
-        put(u);
-      }
+      for (int k = 0; k < 3; ++k) put_f32(buf, positions(v, k));
     out.write(buf.data(), static_cast<std::streamsize>(buf.size()));
     buf.clear();
     for (Eigen::Index f = 0; f < triangles.rows(); ++f) {
       buf.push_back(3);
-      for (int k = 0; k < 3; ++k) put(static_cast<std::uint32_t>(triangles(f, k)));
+      for (int k = 0; k < 3; ++k) put_u32(buf, static_cast<std::uint32_t>(triangles(f, k)));
     }
     out.write(buf.data(), static_cast<std::streamsize>(buf.size()));
   });
