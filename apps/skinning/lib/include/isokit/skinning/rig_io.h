@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 /// \file
 /// Rig files: `load_rig` reads a skinned character (glTF 2.0 .gltf/.glb, FBX, COLLADA .dae) through
-/// assimp; `save_rig` writes a rig as glTF 2.0 (own writer) that `load_rig` reads back with the
+/// assimp; `save_rig` writes a rig as glTF 2.0 (through tinygltf) that `load_rig` reads back with the
 /// same skinning; `write_baked_glb` writes a baked deformation (one morph target per frame) that
 /// any glTF viewer plays; `write_pc2` writes it as a point cache (Blender, 3ds Max); `write_ply`
 /// writes one posed mesh. Format details and limits:
