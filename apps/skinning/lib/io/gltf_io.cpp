@@ -2,12 +2,15 @@
 #include "io/gltf_io.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <limits>
 #include <ostream>
 #include <sstream>
+#include <stdexcept>
 
 #include "isokit/core/atomic_file.h"
 #include "isokit/core/error.h"
