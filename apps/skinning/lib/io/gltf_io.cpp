@@ -258,15 +258,6 @@ tinygltf::Model read_model(const std::string& path, std::vector<std::string>* wa
   return model;
 }
 
-std::string embedded_gltf(tinygltf::Model model) {
-  model.images.clear();
-  for (tinygltf::Buffer& b : model.buffers) b.uri.clear();
-  std::ostringstream out;
-  tinygltf::TinyGLTF writer;
-  writer.WriteGltfSceneToStream(&model, out, false, false);
-  return out.str();
-}
-
 namespace {
 
 /// One component at `p` of glTF component type `type` as a double (normalized integers mapped to

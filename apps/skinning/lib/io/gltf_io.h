@@ -2,15 +2,18 @@
 /// \file
 /// Private glTF 2.0 helpers of the rig I/O, on tinygltf (the container, JSON, buffers, data URIs
 /// and the GLB / .gltf writers are tinygltf's): a document builder with one binary buffer
-/// (written as .glb or as .gltf with an embedded base64 buffer), the reader of a file, and the
-/// decoding of accessors (tinygltf leaves it to its users) for the checks the loader makes before
-/// assimp reads a file.
+/// (written as .glb or as .gltf with an embedded base64 buffer), the reader of a file, the
+/// decoding of accessors (tinygltf leaves it to its users), and the scene of a model as an
+/// aiScene (so that the loader reads every format from one structure).
 #pragma once
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
+
+#include <assimp/scene.h>
 
 // tinygltf (Debian libtinygltf-dev) is compiled into isokit (io/tinygltf.cpp), in a namespace of
 // its own: Debian's libdraco, which assimp links, exports an older tinygltf of its own (struct
@@ -77,8 +80,11 @@ class Builder {
 /// glTF version other than 2.
 tinygltf::Model read_model(const std::string& path, std::vector<std::string>* warnings = nullptr);
 
-/// Writes `model` as a self-contained .gltf text (buffers as base64 data URIs, images left out).
-std::string embedded_gltf(tinygltf::Model model);
+/// The scene of `model` as the loader reads every format: an aiScene built as assimp's glTF
+/// importer builds it (io/gltf_scene.cpp says where and why it differs). `node_names`: one unique
+/// name per node. \throw InputError naming `path` for a node cycle or a bad accessor.
+std::unique_ptr<aiScene> to_ai_scene(const tinygltf::Model& model, const std::vector<std::string>& node_names,
+                                     const std::string& path);
 
 /// Reads accessor `index` as doubles (`count * components` values; normalized integers mapped to
 /// [0, 1] / [-1, 1], sparse substitution applied). \throw InputError naming `what` for a bad

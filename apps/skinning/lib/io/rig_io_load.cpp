@@ -1,14 +1,14 @@
 // SPDX-License-Identifier: MIT
-// load_rig: assimp scene -> Rig (merged, welded mesh; joints parents first with the bind pose as
-// rest pose; all weight sets; clips sampled at a fixed rate). glTF files are read first by
-// tinygltf and checked (container, JSON, joint indices of every weight set), because assimp drops
-// out-of-range joint indices silently and reports malformed files only as "no suitable reader".
+// load_rig: scene -> Rig (merged, welded mesh; joints parents first with the bind pose as rest
+// pose; all weight sets; clips sampled at a fixed rate). glTF files are read by tinygltf, checked
+// (joint indices of every weight set, finite data) and turned into an aiScene (gltf_scene.cpp);
+// FBX and COLLADA are read by assimp. Both go through the same Loader.
 #include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <map>
-#include <random>
+#include <memory>
 #include <set>
 #include <unordered_map>
 #include <utility>
@@ -19,7 +19,6 @@
 #include <assimp/Importer.hpp>
 
 #include "io/gltf_io.h"
-#include "isokit/core/atomic_file.h"
 #include "isokit/core/error.h"
 #include "isokit/skinning/procedural.h"
 #include "isokit/skinning/rig_io.h"
@@ -86,52 +85,9 @@ struct GltfInfo {
   std::vector<std::string> node_names;
   /// Unique name -> the file's name, for the nodes renamed (empty: every name is unique).
   std::map<std::string, std::string> file_names;
-  /// A self-contained copy to give assimp instead of the file (empty: read the file itself).
-  std::string patched;
 };
 
-// assimp 5.2 crashes on a skin without inverseBindMatrices (optional in glTF: identities). Such
-// files are rewritten for assimp (by tinygltf): identity matrices added, every buffer embedded as
-// a data URI, images, textures and material details dropped (the rig needs none of them).
-std::string patch_for_assimp(tinygltf::Model m, const GltfInfo& info, LoadReport& report) {
-  if (!info.file_names.empty())
-    for (std::size_t n = 0; n < info.node_names.size(); ++n) m.nodes[n].name = info.node_names[n];
-  for (std::size_t s = 0; s < m.skins.size(); ++s) {
-    if (m.skins[s].inverseBindMatrices >= 0) continue;
-    const std::size_t n = m.skins[s].joints.size();
-    tinygltf::Buffer buffer;
-    buffer.data.assign(64 * n, 0);
-    for (std::size_t k = 0; k < n; ++k)
-      for (std::size_t d = 0; d < 4; ++d) {
-        const float one = 1.0f;
-        std::memcpy(buffer.data.data() + 64 * k + 20 * d, &one, 4);  // little-endian hosts (assimp's too)
-      }
-    tinygltf::BufferView view;
-    view.buffer = static_cast<int>(m.buffers.size());
-    view.byteLength = buffer.data.size();
-    m.buffers.push_back(std::move(buffer));
-    m.bufferViews.push_back(view);
-    tinygltf::Accessor accessor;
-    accessor.bufferView = static_cast<int>(m.bufferViews.size()) - 1;
-    accessor.componentType = gltf::kFloat;
-    accessor.count = n;
-    accessor.type = TINYGLTF_TYPE_MAT4;
-    m.accessors.push_back(accessor);
-    m.skins[s].inverseBindMatrices = static_cast<int>(m.accessors.size()) - 1;
-    report.warnings.push_back("skin " + std::to_string(s) +
-                              " has no inverse bind matrices: identities (glTF default)");
-  }
-  m.textures.clear();
-  m.samplers.clear();
-  for (tinygltf::Material& material : m.materials) {
-    tinygltf::Material named;
-    named.name = material.name;
-    material = named;
-  }
-  return gltf::embedded_gltf(std::move(m));
-}
-
-// assimp names an unnamed glTF node "nodes[i]".
+// An unnamed glTF node is "nodes[i]" (as assimp names it).
 std::string gltf_node_name(const std::vector<tinygltf::Node>& nodes, std::size_t i) {
   return nodes[i].name.empty() ? "nodes[" + std::to_string(i) + "]" : nodes[i].name;
 }
@@ -239,15 +195,15 @@ void check_skinned_nodes(const tinygltf::Model& model, const std::string& path, 
   }
 }
 
-GltfInfo check_gltf(const std::string& path, LoadReport& report) {
-  tinygltf::Model model = gltf::read_model(path, &report.warnings);
+GltfInfo check_gltf(const tinygltf::Model& model, const std::string& path, LoadReport& report) {
   GltfInfo info;
   unique_node_names(model.nodes, info);
   check_skins(model, path, info);
   check_skinned_nodes(model, path, report);
-  bool patch = !info.file_names.empty();
-  for (const tinygltf::Skin& skin : model.skins) patch = patch || skin.inverseBindMatrices < 0;
-  if (patch) info.patched = patch_for_assimp(std::move(model), info, report);
+  for (std::size_t s = 0; s < model.skins.size(); ++s)
+    if (model.skins[s].inverseBindMatrices < 0)
+      report.warnings.push_back("skin " + std::to_string(s) +
+                                " has no inverse bind matrices: identities (glTF default)");
   if (!info.file_names.empty())
     report.warnings.push_back(
         std::to_string(info.file_names.size()) + " node(s) share a name with another (first " +
@@ -503,6 +459,7 @@ class Loader {
   Rig load();
 
  private:
+  void read_with_assimp();
   int node_named(const std::string& name, const std::string& what) const;
   Rig load_skeleton();
   void select_meshes();
@@ -530,6 +487,7 @@ class Loader {
   LoadReport& report_;
   GltfInfo gltf_;
   Assimp::Importer importer_;
+  std::unique_ptr<aiScene> own_scene_;  ///< glTF: the scene built from the tinygltf model
   const aiScene* scene_{nullptr};
   Nodes nodes_;
   std::vector<MeshUse> meshes_;
@@ -1080,6 +1038,29 @@ std::vector<Affine> Loader::joint_pose(const std::vector<Affine>& local,
   return pose;
 }
 
+/// FBX, COLLADA and the other formats: assimp's scene.
+void Loader::read_with_assimp() {
+  importer_.SetPropertyBool(AI_CONFIG_IMPORT_FBX_PRESERVE_PIVOTS, false);
+  try {
+    scene_ = importer_.ReadFile(path_, aiProcess_Triangulate | aiProcess_ValidateDataStructure);
+    const std::string error = importer_.GetErrorString();
+    if (scene_ == nullptr && error.rfind("Validation failed", 0) == 0) {
+      // assimp's own consistency check is stricter than the rig needs (e.g. key times past the
+      // animation's declared duration); the loader checks what it uses itself.
+      scene_ = importer_.ReadFile(path_, aiProcess_Triangulate);
+      if (scene_ != nullptr) report_.warnings.push_back("assimp: " + error + " (loaded without that check)");
+    }
+  } catch (const InputError&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw InputError(path_ + ": assimp failed: " + e.what() +
+                     "; check that it is a valid glTF 2.0, FBX or COLLADA file");
+  }
+  require(scene_ != nullptr && scene_->mRootNode != nullptr, path_,
+          std::string("assimp cannot read it: ") + importer_.GetErrorString(),
+          "check that it is a valid glTF 2.0, FBX or COLLADA file (export it again)");
+}
+
 Rig Loader::load() {
   rig_.name = path_;
   require(options_.fps > 0 && std::isfinite(options_.fps), path_ + ": LoadOptions::fps",
@@ -1092,51 +1073,17 @@ Rig Loader::load() {
   require(fs::is_regular_file(path_, ec), path_, "is not a regular file", "give the path of a rig file");
   const std::string ext = gltf::extension(path_);
   report_.format = ext.empty() ? std::string() : ext.substr(1);
-  if (ext == ".gltf" || ext == ".glb") gltf_ = check_gltf(path_, report_);
-
-  importer_.SetPropertyBool(AI_CONFIG_IMPORT_FBX_PRESERVE_PIVOTS, false);
-  try {
-    auto read = [&](const std::string& file) {
-      scene_ = importer_.ReadFile(file, aiProcess_Triangulate | aiProcess_ValidateDataStructure);
-      const std::string error = importer_.GetErrorString();
-      if (scene_ == nullptr && error.rfind("Validation failed", 0) == 0) {
-        // assimp's own consistency check is stricter than the rig needs (e.g. key times past the
-        // animation's declared duration); the loader checks what it uses itself.
-        scene_ = importer_.ReadFile(file, aiProcess_Triangulate);
-        if (scene_ != nullptr)
-          report_.warnings.push_back("assimp: " + error + " (loaded without that check)");
-      }
-    };
-    if (gltf_.patched.empty()) {
-      read(path_);
-    } else {
-      std::random_device rd;
-      const fs::path dir =
-          fs::temp_directory_path() / ("isokit-gltf-" + std::to_string(rd()) + std::to_string(rd()));
-      fs::create_directories(dir);
-      struct Cleanup {
-        fs::path dir;
-        ~Cleanup() {
-          std::error_code ignored;
-          fs::remove_all(dir, ignored);
-        }
-      } cleanup{dir};
-      const std::string copy = (dir / "patched.gltf").string();
-      write_text_file_atomically(copy, gltf_.patched);
-      read(copy);
-    }
-  } catch (const InputError&) {
-    throw;
-  } catch (const std::exception& e) {
-    throw InputError(path_ + ": assimp failed: " + e.what() +
-                     "; check that it is a valid glTF 2.0, FBX or COLLADA file");
+  if (ext == ".gltf" || ext == ".glb") {
+    const tinygltf::Model model = gltf::read_model(path_, &report_.warnings);
+    gltf_ = check_gltf(model, path_, report_);
+    own_scene_ = gltf::to_ai_scene(model, gltf_.node_names, path_);
+    scene_ = own_scene_.get();
+  } else {
+    read_with_assimp();
   }
-  require(scene_ != nullptr && scene_->mRootNode != nullptr, path_,
-          std::string("assimp cannot read it: ") + importer_.GetErrorString(),
-          "check that it is a valid glTF 2.0, FBX or COLLADA file (export it again)");
   nodes_ = collect_nodes(scene_, path_);
   if (options_.skeleton_only) return load_skeleton();
-  require(!(scene_->mFlags & AI_SCENE_FLAGS_INCOMPLETE), path_, "assimp read an incomplete scene",
+  require(!(scene_->mFlags & AI_SCENE_FLAGS_INCOMPLETE), path_, "the scene is incomplete (no mesh)",
           "export the file again with its meshes (or read it as a clip file: --clip-file)");
   select_meshes();
   bind_pose();

@@ -1,10 +1,10 @@
 // SPDX-License-Identifier: MIT
 /// \file
-/// Rig files: `load_rig` reads a skinned character (glTF 2.0 .gltf/.glb, FBX, COLLADA .dae) through
-/// assimp; `save_rig` writes a rig as glTF 2.0 (through tinygltf) that `load_rig` reads back with the
-/// same skinning; `write_baked_glb` writes a baked deformation (one morph target per frame) that
-/// any glTF viewer plays; `write_pc2` writes it as a point cache (Blender, 3ds Max); `write_ply`
-/// writes one posed mesh. Format details and limits:
+/// Rig files: `load_rig` reads a skinned character (glTF 2.0 .gltf/.glb through tinygltf, FBX and
+/// COLLADA .dae through assimp); `save_rig` writes a rig as glTF 2.0 (through tinygltf) that
+/// `load_rig` reads back with the same skinning; `write_baked_glb` writes a baked deformation (one
+/// morph target per frame) that any glTF viewer plays; `write_pc2` writes it as a point cache
+/// (Blender, 3ds Max); `write_ply` writes one posed mesh. Format details and limits:
 /// docs/skinning-io.md.
 ///
 /// Loading, in short: every skinned mesh (each glTF primitive is one) is merged into one mesh;
@@ -54,7 +54,7 @@ struct LoadOptions {
 /// What `load_rig` found (for the CLI's summary); `warnings` lists everything it changed or
 /// skipped (unskinned meshes, welded vertices with different weights, node pose ≠ bind pose…).
 struct LoadReport {
-  std::string format;        ///< assimp's importer extension ("gltf", "glb", "fbx", "dae")
+  std::string format;        ///< the file's extension ("gltf", "glb", "fbx", "dae")
   int meshes{0};             ///< source meshes (glTF primitives) merged
   int file_vertices{0};      ///< output (unwelded) vertices kept
   int welded_vertices{0};    ///< `Rig::rest.rows()`
