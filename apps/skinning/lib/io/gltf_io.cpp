@@ -9,7 +9,6 @@
 #include <iterator>
 #include <limits>
 #include <ostream>
-#include <sstream>
 #include <stdexcept>
 
 #include "isokit/core/atomic_file.h"
