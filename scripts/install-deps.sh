@@ -12,7 +12,8 @@ packages=(
   libtbb-dev                              # parallel loops
   libopenmesh-dev                         # mesh I/O and topology
   libboost-graph-dev                      # skeleton topology
-  libassimp-dev                           # rig loading (glTF, FBX, COLLADA)
+  libassimp-dev                           # rig loading (glTF scenes, FBX, COLLADA)
+  libtinygltf-dev                         # glTF container, JSON and writers
   libcgal-dev                             # exact self-intersection counts (skin metrics)
   libcli11-dev nlohmann-json3-dev         # command lines, JSON
   libcairo2-dev                           # 2D figures (PNG/SVG/PDF)
@@ -25,8 +26,18 @@ for p in "${packages[@]}"; do
   dpkg-query -W -f='${db:Status-Status}' "$p" 2>/dev/null | grep -qx installed || missing+=("$p")
 done
 
+# The Khronos glTF validator (npm, not a Debian package), run by a test when node is present;
+# optional: skipped without npm or without a network.
+install_validator() {
+  command -v npm >/dev/null || return 0
+  [ -d "$(npm root -g)/gltf-validator" ] && return 0
+  echo "install-deps: npm install -g gltf-validator"
+  npm install -g gltf-validator >/dev/null 2>&1 || echo "install-deps: gltf-validator not installed (optional)"
+}
+
 if [ ${#missing[@]} -eq 0 ]; then
   echo "install-deps: all ${#packages[@]} packages present"
+  install_validator
   exit 0
 fi
 
@@ -39,3 +50,4 @@ echo "install-deps: installing ${missing[*]}"
 export DEBIAN_FRONTEND=noninteractive
 "${sudo_cmd[@]}" apt-get update -q
 "${sudo_cmd[@]}" apt-get install -y -q --no-install-recommends "${missing[@]}"
+install_validator

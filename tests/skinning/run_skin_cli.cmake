@@ -36,10 +36,34 @@ endif()
 # bake with every output on the cylinder.
 run(bake procedural:cylinder --method tracking2014 --bend Bone1:x:120 --frames 9 --compare
     --out "${OUT}/cyl/out.glb" --metrics "${OUT}/cyl/metrics.json" --render "${OUT}/cyl/render"
-    --ply "${OUT}/cyl/ply")
-foreach(f cyl/out.glb cyl/metrics.json cyl/ply/frame_0000.ply cyl/ply/frame_0008.ply)
+    --ply "${OUT}/cyl/ply" --pc2 "${OUT}/cyl/out.pc2")
+foreach(f cyl/out.glb cyl/metrics.json cyl/ply/frame_0000.ply cyl/ply/frame_0008.ply cyl/out.pc2)
   if(NOT EXISTS "${OUT}/${f}")
     message(FATAL_ERROR "bake did not write ${f}")
+  endif()
+endforeach()
+# The point cache: signature, then 9 samples of every vertex (header 32 bytes, 12 per point).
+file(READ "${OUT}/cyl/out.pc2" pc2_head LIMIT 12 HEX)
+file(SIZE "${OUT}/cyl/out.pc2" pc2_size)
+math(EXPR pc2_points "(${pc2_size} - 32) / 108")
+math(EXPR pc2_rest "(${pc2_size} - 32) % 108")
+if(NOT pc2_head STREQUAL "504f494e5443414348453200" OR NOT pc2_rest EQUAL 0 OR pc2_points LESS 1000)
+  message(FATAL_ERROR "out.pc2 is not a PC2 cache of 9 frames (${pc2_head}, ${pc2_size} bytes)")
+endif()
+# Read back: the cylinder's file order is its welded order, so sample k of the cache holds the
+# same float32 bytes as the vertex block of frame k's PLY.
+foreach(k 0 4 8)
+  file(READ "${OUT}/cyl/ply/frame_000${k}.ply" ply_head LIMIT 400)
+  string(FIND "${ply_head}" "end_header\n" at)
+  string(REGEX MATCH "element vertex ([0-9]+)" _ "${ply_head}")
+  set(nv ${CMAKE_MATCH_1})
+  math(EXPR at "${at} + 11")
+  math(EXPR block "${nv} * 12")
+  math(EXPR pc2_at "32 + ${k} * ${block}")
+  file(READ "${OUT}/cyl/ply/frame_000${k}.ply" ply_xyz OFFSET ${at} LIMIT ${block} HEX)
+  file(READ "${OUT}/cyl/out.pc2" pc2_xyz OFFSET ${pc2_at} LIMIT ${block} HEX)
+  if(NOT nv EQUAL pc2_points OR NOT ply_xyz STREQUAL pc2_xyz)
+    message(FATAL_ERROR "out.pc2 sample ${k} differs from frame_000${k}.ply (${nv} / ${pc2_points} points)")
   endif()
 endforeach()
 expect_png("${OUT}/cyl/render/contact_sheet.png")
@@ -82,6 +106,7 @@ foreach(args "bake;procedural:cylinder;--bend;Elbow:x:90;--out;${OUT}/bad.glb"
              "bake;procedural:cylinder;--out;${OUT}/bad.glb"
              "bake;procedural:cylinder;--bend;Bone1:x:90;--device;cuda;--out;${OUT}/bad.glb"
              "bake;procedural:cylinder;--bend;Bone1:x:90;--device;tpu;--out;${OUT}/bad.glb"
+             "bake;procedural:cylinder;--method;dqs;--bend;Bone1:x:90;--frames;3;--out;${OUT}/bad.glb;--pc2;${OUT}/bad.txt"
              "demo;--out;${OUT}/bad;--vertices;-5")
   execute_process(COMMAND "${EXE}" ${args} RESULT_VARIABLE rc OUTPUT_VARIABLE o ERROR_VARIABLE e)
   if(NOT rc EQUAL 2 OR NOT e MATCHES "error")

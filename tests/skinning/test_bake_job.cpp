@@ -3,10 +3,15 @@
 // peak frame, the written result, the outputs.
 #include <catch2/catch.hpp>
 
+#include <cstdint>
+#include <cstring>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 
 #include "isokit/core/error.h"
 #include "isokit/skinning/bake_job.h"
+#include "isokit/skinning/rig_io.h"
 #include "pipeline_fixture.h"
 
 using namespace isokit::skinning;
@@ -86,7 +91,7 @@ TEST_CASE("bake job: fit warnings name under-resolved parts; outputs are written
   const std::vector<BakeResult> results{sk.bake(Method::kDqs, poses, o)};
   const fs::path dir = fs::temp_directory_path() / "isokit-test-bake-job";
   fs::remove_all(dir);
-  BakeOutputs out{(dir / "a" / "x.glb").string(), (dir / "m.json").string(), "", (dir / "ply").string()};
+  BakeOutputs out{(dir / "a" / "x.glb").string(), (dir / "m.json").string(), "", (dir / "ply").string(), ""};
   const ReportContext ctx{"test", 30, 1, 0};
   const std::vector<std::string> written = write_bake_outputs(sk.rig(), results, results[0], ctx, {}, out);
   CHECK(written.size() == 3);
@@ -105,4 +110,120 @@ TEST_CASE("bake job: --device names cpu or cuda; cuda is refused with its reason
   // is named and the fix is --device cpu.
   CHECK_THROWS_WITH(check_device(Device::kCuda),
                     Catch::Contains("--device cuda: ") && Catch::Contains("use --device cpu"));
+}
+
+namespace {
+
+/// A PC2 point cache as read back: its header fields and positions[sample][point * 3 + axis].
+struct Pc2 {
+  std::string signature;
+  std::int32_t version{0}, points{0}, samples{0};
+  float start{0}, rate{0};
+  std::vector<std::vector<float>> positions;
+};
+
+// Little-endian reads of the header and the samples (independent of the writer's code).
+Pc2 read_pc2(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  const std::vector<unsigned char> b((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  REQUIRE(b.size() >= 32);
+  auto u32 = [&](std::size_t at) {
+    return static_cast<std::uint32_t>(b[at]) | static_cast<std::uint32_t>(b[at + 1]) << 8 |
+           static_cast<std::uint32_t>(b[at + 2]) << 16 | static_cast<std::uint32_t>(b[at + 3]) << 24;
+  };
+  auto f32 = [&](std::size_t at) {
+    const std::uint32_t u = u32(at);
+    float x;
+    std::memcpy(&x, &u, 4);
+    return x;
+  };
+  Pc2 pc;
+  pc.signature.assign(b.begin(), b.begin() + 12);
+  pc.version = static_cast<std::int32_t>(u32(12));
+  pc.points = static_cast<std::int32_t>(u32(16));
+  pc.start = f32(20);
+  pc.rate = f32(24);
+  pc.samples = static_cast<std::int32_t>(u32(28));
+  REQUIRE(b.size() == 32 + 12 * static_cast<std::size_t>(pc.points) * static_cast<std::size_t>(pc.samples));
+  for (std::int32_t s = 0; s < pc.samples; ++s) {
+    std::vector<float> p(3 * static_cast<std::size_t>(pc.points));
+    for (std::size_t i = 0; i < p.size(); ++i)
+      p[i] = f32(32 + 4 * (static_cast<std::size_t>(s) * p.size() + i));
+    pc.positions.push_back(p);
+  }
+  return pc;
+}
+
+/// The capsule with an output mesh unlike its welded one: output vertices in reverse order, then
+/// a second copy of the first 10 welded vertices (split normals), as a loaded file has.
+Rig reordered_capsule() {
+  Rig r = testing::capsule_rig(8, 8, 2);
+  const int n = static_cast<int>(r.rest.rows());
+  for (int i = 0; i < n; ++i) r.output.to_welded.push_back(n - 1 - i);
+  for (int i = 0; i < 10; ++i) r.output.to_welded.push_back(i);
+  r.output.triangles = r.triangles;
+  for (Eigen::Index f = 0; f < r.triangles.rows(); ++f)
+    for (int k = 0; k < 3; ++k) r.output.triangles(f, k) = n - 1 - r.triangles(f, k);
+  r.output.primitive_offsets = {0, static_cast<int>(r.triangles.rows())};
+  validate(r);
+  return r;
+}
+
+}  // namespace
+
+TEST_CASE("bake job: --pc2 writes the baked positions in the file's vertex order", "[skinning][bake_job]") {
+  Skinner sk(reordered_capsule(), SkinSetup{});
+  const Rig& rig = sk.rig();
+  const std::vector<Pose> poses = bend_animation(rig, {parse_bend("Bone1:z:60", rig)}, 5);
+  BakeOptions o;
+  o.self_intersections = false;
+  const std::vector<BakeResult> results{sk.bake(Method::kDqs, poses, o)};
+  const fs::path dir = fs::temp_directory_path() / "isokit-test-bake-pc2";
+  fs::remove_all(dir);
+  BakeOutputs out;
+  out.pc2 = (dir / "sub" / "bend.pc2").string();
+  const ReportContext ctx{"test", 30, 1, 0};
+  const std::vector<std::string> written = write_bake_outputs(rig, results, results[0], ctx, {}, out);
+  REQUIRE(written.size() == 1);
+  CHECK(written[0] == out.pc2 + " (5 frames)");
+
+  const Pc2 pc = read_pc2(out.pc2);
+  CHECK(pc.signature == std::string("POINTCACHE2\0", 12));
+  CHECK(pc.version == 1);
+  CHECK(pc.points == static_cast<std::int32_t>(rig.output.to_welded.size()));
+  CHECK(pc.start == 0.0f);
+  CHECK(pc.rate == 1.0f);
+  REQUIRE(pc.samples == 5);
+  bool equal = true;
+  for (std::size_t k = 0; k < 5; ++k)
+    for (std::size_t i = 0; i < rig.output.to_welded.size(); ++i)
+      for (int c = 0; c < 3; ++c)
+        equal = equal && pc.positions[k][3 * i + static_cast<std::size_t>(c)] ==
+                             results[0].frames[k](rig.output.to_welded[i], c);
+  CHECK(equal);
+  CHECK(results[0].frames[2] != results[0].frames[0]);  // the bend moved the mesh
+
+  // Bad paths: one line naming the path and the fix, and no file written.
+  auto error_of = [&](const std::string& path) {
+    BakeOutputs bad;
+    bad.pc2 = path;
+    try {
+      write_bake_outputs(rig, results, results[0], ctx, {}, bad);
+    } catch (const isokit::InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  std::ofstream(dir / "file") << "x";
+  fs::create_directories(dir / "folder.pc2");
+  const std::string wrong_ext = error_of((dir / "bend.txt").string());
+  const std::string folder = error_of((dir / "folder.pc2").string());
+  const std::string under_file = error_of((dir / "file" / "bend.pc2").string());
+  CHECK_THAT(wrong_ext, Catch::Contains("bend.txt") && Catch::Contains("extension must be .pc2"));
+  CHECK_THAT(folder, Catch::Contains("is a folder"));
+  CHECK_THAT(under_file, Catch::Contains("cannot create the folder"));
+  for (const std::string& e : {wrong_ext, folder, under_file}) CHECK(e.find('\n') == std::string::npos);
+  CHECK_FALSE(fs::exists(dir / "bend.txt"));
+  CHECK(fs::is_empty(dir / "folder.pc2"));
+  fs::remove_all(dir);
 }

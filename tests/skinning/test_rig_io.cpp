@@ -16,6 +16,8 @@
 #include <set>
 #include <sstream>
 
+#include <sys/wait.h>
+
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 #include <assimp/Importer.hpp>
@@ -654,6 +656,46 @@ TEST_CASE("rig_io: baked GLB errors leave no file behind", "[skinning][io]") {
   CHECK_THAT(error_of([&] { write_baked_glb(rig, {rig.rest}, 30, dir.file("x.gltf")); }),
              Catch::Contains(".glb"));
   CHECK(dir.entries() == 0);
+}
+
+TEST_CASE("rig_io: saved and baked glTF pass the Khronos validator with no error or warning",
+          "[skinning][io]") {
+  // Runs tests/skinning/validate_gltf.js under node (npm gltf-validator); skipped without them.
+  if (std::system("node --version > /dev/null 2>&1") != 0) {
+    WARN("node not found: the Khronos validator is not run");
+    return;
+  }
+  const Rig rig = bar_rig();
+  TempDir dir("validator");
+  std::vector<track::Positions> frames;
+  for (int f = 0; f < 4; ++f) {
+    std::vector<Affine> local = rest_pose(rig);
+    local[3] = local[3] * Affine(Eigen::AngleAxisd(0.3 * f, Eigen::Vector3d::UnitZ()));
+    frames.push_back(f == 0 ? rig.rest : lbs(rig, local));
+  }
+  save_rig(rig, dir.file("rig.glb"));
+  save_rig(rig, dir.file("rig.gltf"));
+  write_baked_glb(rig, frames, 30, dir.file("baked.glb"));
+  BakedGlbOptions dense;
+  dense.sparse = false;
+  dense.normals = false;
+  dense.interpolation = MorphInterpolation::kStep;
+  write_baked_glb(rig, frames, 30, dir.file("dense.glb"), dense);
+  const std::string log = dir.file("validator.txt");
+  std::string command = "node '" ISOKIT_TEST_SOURCE_DIR "/skinning/validate_gltf.js'";
+  for (const char* f : {"rig.glb", "rig.gltf", "baked.glb", "dense.glb"}) command += " '" + dir.file(f) + "'";
+  const int status = std::system((command + " > '" + log + "' 2>&1").c_str());
+  const std::vector<std::uint8_t> bytes = read_all(log);
+  const std::string out(bytes.begin(), bytes.end());
+  const int rc = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  if (rc == 77) {
+    WARN("the Khronos validator is not installed (npm install -g gltf-validator): " << out);
+    return;
+  }
+  INFO(out);
+  CHECK(rc == 0);
+  CHECK_THAT(out, Catch::Contains("baked.glb: errors 0 warnings 0") &&
+                      Catch::Contains("rig.gltf: errors 0 warnings 0"));
 }
 
 TEST_CASE("rig_io: write_ply writes binary little-endian PLY", "[skinning][io]") {

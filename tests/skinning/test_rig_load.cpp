@@ -158,6 +158,30 @@ TEST_CASE("rig_load: separate parts, open borders and flipped faces load and are
   CHECK(s.inconsistent_edges == 3);
 }
 
+TEST_CASE("rig_load: glTF triangle strips and fans are triangulated; lines and points are skipped",
+          "[skinning][io]") {
+  const Rig rig = clip_capsule();
+  Scratch dir("modes");
+  json doc = saved_json(rig, dir / "capsule.gltf");
+  json& prims = doc["meshes"][0]["primitives"];
+  REQUIRE(prims.size() == 1);
+  const std::size_t indices = doc["accessors"][prims[0]["indices"].get<std::size_t>()]["count"];
+  // The same vertices and indices read as a strip, as a fan, and as lines (a second primitive).
+  for (const int mode : {5, 6}) {
+    json d = doc;
+    d["meshes"][0]["primitives"][0]["mode"] = mode;
+    json lines = d["meshes"][0]["primitives"][0];
+    lines["mode"] = 1;
+    d["meshes"][0]["primitives"].push_back(lines);
+    write_json(dir / "modes.gltf", d);
+    LoadReport report;
+    const Rig back = load_rig(dir / "modes.gltf", {}, &report);
+    INFO("mode " << mode);
+    CHECK(back.output.triangles.rows() == static_cast<Eigen::Index>(indices) - 2);
+    CHECK_THAT(joined_warnings(report), Catch::Contains("has no triangles"));
+  }
+}
+
 TEST_CASE("rig_load: scale keys are applied", "[skinning][io]") {
   Rig rig = clip_capsule();
   for (std::size_t f = 0; f < rig.clips[0].local.size(); ++f)

@@ -4,7 +4,7 @@
 //   isokit-skin bake RIG --method M [--clip NAME [--clip-file F] | --bend J:AXIS:DEG ... |
 //                    --pose-script P.json] (none: the rig's only clip)
 //                    [--frames N] [--fps N] [--max-step-rad R] [--setup S.json] --out OUT.glb
-//                    [--metrics M.json] [--render DIR] [--ply DIR]
+//                    [--metrics M.json] [--render DIR] [--ply DIR] [--pc2 OUT.pc2]
 //   isokit-skin demo [--out DIR] [--vertices N] [--frames N] [--max-step-rad R]
 // RIG is a glTF/FBX/COLLADA file or procedural:cylinder | procedural:finger |
 // procedural:humanoid?vertices=13000.
@@ -177,6 +177,9 @@ CLI::App* add_bake(CLI::App& app, Args& a) {
   bake->add_option("--metrics", a.outputs.metrics, "write the quality metrics (QUALITY.md) as JSON");
   bake->add_option("--render", a.outputs.render_dir, "write PNG renders (peak frame) into this folder");
   bake->add_option("--ply", a.outputs.ply_dir, "write one PLY per frame into this folder");
+  bake->add_option("--pc2", a.outputs.pc2,
+                   "write the baked positions as a PC2 point cache (the file's vertex order; Blender's "
+                   "Mesh Cache modifier, 3ds Max)");
   bake->add_flag("--compare", a.compare,
                  "also run the other three methods (metrics and renders side by side)");
   bake->add_flag("--no-self-intersections", a.no_self,
@@ -200,7 +203,7 @@ void make_demo(Args& a) {
   a.animation = AnimationRequest{};
   a.animation.bends = {"LeftForeArm:x:150", "LeftLeg:x:150"};
   a.animation.frames = a.demo_frames;
-  a.outputs = BakeOutputs{a.demo_out + "/tracking2014.glb", a.demo_out + "/metrics.json", a.demo_out, ""};
+  a.outputs = BakeOutputs{a.demo_out + "/tracking2014.glb", a.demo_out + "/metrics.json", a.demo_out, "", ""};
   a.max_step = a.demo_max_step;
 }
 
@@ -244,6 +247,7 @@ int run_info(const Args& a, const Progress& progress) {
 int run_bake(const Args& a, const std::vector<Method>& methods, Method main, const Progress& progress) {
   check_device(device_from_string(a.device));
   check_animation_request(a.animation);
+  check_bake_outputs(a.outputs);
   SkinSetup setup = a.setup.empty() ? SkinSetup{} : load_setup(a.setup);
   if (a.max_step > 0) setup.substeps.max_step_rad = a.max_step;
   std::fprintf(stderr, "isokit-skin: loading %s\n", a.rig.c_str());

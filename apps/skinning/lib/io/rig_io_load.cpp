@@ -1,17 +1,17 @@
 // SPDX-License-Identifier: MIT
-// load_rig: assimp scene -> Rig (merged, welded mesh; joints parents first with the bind pose as
-// rest pose; all weight sets; clips sampled at a fixed rate). glTF files are checked first with
-// the private glTF reader (container, JSON, joint indices of every weight set), because assimp
-// drops out-of-range joint indices silently and reports malformed files only as
-// "no suitable reader".
+// load_rig: scene -> Rig (merged, welded mesh; joints parents first with the bind pose as rest
+// pose; all weight sets; clips sampled at a fixed rate). glTF files are read by tinygltf, checked
+// (joint indices of every weight set, finite data) and turned into an aiScene (gltf_scene.cpp);
+// FBX and COLLADA are read by assimp. Both go through the same Loader.
 #include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <map>
-#include <random>
+#include <memory>
 #include <set>
 #include <unordered_map>
+#include <utility>
 
 #include <assimp/config.h>
 #include <assimp/postprocess.h>
@@ -19,7 +19,6 @@
 #include <assimp/Importer.hpp>
 
 #include "io/gltf_io.h"
-#include "isokit/core/atomic_file.h"
 #include "isokit/core/error.h"
 #include "isokit/skinning/procedural.h"
 #include "isokit/skinning/rig_io.h"
@@ -29,7 +28,6 @@ namespace isokit::skinning {
 namespace {
 
 namespace fs = std::filesystem;
-using nlohmann::json;
 
 // Relative tolerance under which two bind matrices of one joint count as equal.
 constexpr double kBindTolerance = 1e-4;
@@ -87,65 +85,16 @@ struct GltfInfo {
   std::vector<std::string> node_names;
   /// Unique name -> the file's name, for the nodes renamed (empty: every name is unique).
   std::map<std::string, std::string> file_names;
-  /// A self-contained copy to give assimp instead of the file (empty: read the file itself).
-  std::string patched;
 };
 
-// assimp 5.2 crashes on a skin without inverseBindMatrices (optional in glTF: identities). Such
-// files are rewritten for assimp: identity matrices added, every buffer embedded as a data URI,
-// images, textures and material details dropped (the rig needs none of them).
-std::string patch_for_assimp(const gltf::Document& doc, const GltfInfo& info, LoadReport& report) {
-  json j = doc.json;
-  if (!info.file_names.empty())
-    for (std::size_t n = 0; n < info.node_names.size(); ++n) j["nodes"][n]["name"] = info.node_names[n];
-  if (!j.contains("buffers")) j["buffers"] = json::array();
-  json& buffers = j["buffers"];
-  for (std::size_t i = 0; i < doc.buffers.size(); ++i)
-    buffers[i]["uri"] = "data:application/octet-stream;base64," +
-                        gltf::base64_encode(doc.buffers[i].data(), doc.buffers[i].size());
-  if (!j.contains("bufferViews")) j["bufferViews"] = json::array();
-  if (!j.contains("accessors")) j["accessors"] = json::array();
-  json& skins = j["skins"];
-  for (std::size_t s = 0; s < skins.size(); ++s) {
-    if (skins[s].contains("inverseBindMatrices")) continue;
-    const std::size_t n = skins[s]["joints"].size();
-    std::vector<std::uint8_t> bytes(64 * n, 0);
-    for (std::size_t k = 0; k < n; ++k)
-      for (std::size_t d = 0; d < 4; ++d) {
-        const float one = 1.0f;
-        std::memcpy(bytes.data() + 64 * k + 20 * d, &one, 4);  // little-endian hosts (assimp's too)
-      }
-    buffers.push_back(
-        {{"byteLength", bytes.size()},
-         {"uri", "data:application/octet-stream;base64," + gltf::base64_encode(bytes.data(), bytes.size())}});
-    j["bufferViews"].push_back({{"buffer", buffers.size() - 1}, {"byteLength", bytes.size()}});
-    j["accessors"].push_back({{"bufferView", j["bufferViews"].size() - 1},
-                              {"componentType", gltf::kFloat},
-                              {"count", n},
-                              {"type", "MAT4"}});
-    skins[s]["inverseBindMatrices"] = j["accessors"].size() - 1;
-    report.warnings.push_back("skin " + std::to_string(s) +
-                              " has no inverse bind matrices: identities (glTF default)");
-  }
-  j.erase("images");
-  j.erase("textures");
-  j.erase("samplers");
-  if (j.contains("materials"))
-    for (json& m : j["materials"]) m = json{{"name", m.value("name", std::string())}};
-  return j.dump();
-}
-
-// assimp names an unnamed glTF node "nodes[i]".
-std::string gltf_node_name(const json& nodes, std::size_t i) {
-  const json& n = nodes[i];
-  if (n.contains("name") && n["name"].is_string() && !n["name"].get<std::string>().empty())
-    return n["name"].get<std::string>();
-  return "nodes[" + std::to_string(i) + "]";
+// An unnamed glTF node is "nodes[i]" (as assimp names it).
+std::string gltf_node_name(const std::vector<tinygltf::Node>& nodes, std::size_t i) {
+  return nodes[i].name.empty() ? "nodes[" + std::to_string(i) + "]" : nodes[i].name;
 }
 
 /// Unique node names (glTF allows duplicates): the first node (in file order) keeps its name, the
 /// k-th node sharing it is `NAME#k` (k = 2, 3, ...; skipping names the file already uses).
-void unique_node_names(const json& nodes, GltfInfo& info) {
+void unique_node_names(const std::vector<tinygltf::Node>& nodes, GltfInfo& info) {
   std::set<std::string> taken;
   for (std::size_t i = 0; i < nodes.size(); ++i) taken.insert(gltf_node_name(nodes, i));
   std::map<std::string, int> seen;
@@ -162,26 +111,22 @@ void unique_node_names(const json& nodes, GltfInfo& info) {
 }
 
 /// Checks every skin's joint indices and inverse bind matrices; collects the joint names.
-void check_skins(const gltf::Document& doc, const std::string& path, const json& nodes, const json& skins,
-                 GltfInfo& info) {
+void check_skins(const tinygltf::Model& model, const std::string& path, GltfInfo& info) {
   std::set<std::string> names;
-  for (std::size_t s = 0; s < skins.size(); ++s) {
+  for (std::size_t s = 0; s < model.skins.size(); ++s) {
     const std::string what = path + ": skins[" + std::to_string(s) + "]";
-    require(skins[s].contains("joints") && skins[s]["joints"].is_array(), what, "has no joints array",
-            "fix the file or export it again");
-    const json& joints = skins[s]["joints"];
+    const std::vector<int>& joints = model.skins[s].joints;
     for (std::size_t k = 0; k < joints.size(); ++k) {
-      const bool ok = joints[k].is_number_integer() && joints[k].get<long long>() >= 0 &&
-                      joints[k].get<std::size_t>() < nodes.size();
-      require(ok, what + ".joints[" + std::to_string(k) + "]", "names a node that does not exist",
+      require(joints[k] >= 0 && static_cast<std::size_t>(joints[k]) < model.nodes.size(),
+              what + ".joints[" + std::to_string(k) + "]", "names a node that does not exist",
               "fix the file or export it again");
-      const std::string name = info.node_names[joints[k].get<std::size_t>()];
+      const std::string name = info.node_names[static_cast<std::size_t>(joints[k])];
       if (names.insert(name).second) info.skin_joint_names.push_back(name);
     }
-    if (skins[s].contains("inverseBindMatrices")) {
+    if (model.skins[s].inverseBindMatrices >= 0) {
       int comps = 0;
-      const std::vector<double> m = gltf::read_accessor(doc, skins[s]["inverseBindMatrices"].get<int>(),
-                                                        &comps, what + ".inverseBindMatrices");
+      const std::vector<double> m = gltf::read_accessor(model, model.skins[s].inverseBindMatrices, &comps,
+                                                        what + ".inverseBindMatrices");
       require(comps == 16 && m.size() >= 16 * joints.size(), what + ".inverseBindMatrices",
               "needs one MAT4 per joint", "fix the file or export it again");
       for (double x : m)
@@ -193,12 +138,12 @@ void check_skins(const gltf::Document& doc, const std::string& path, const json&
 
 /// Checks one skinned primitive: finite positions, JOINTS_n / WEIGHTS_n in pairs of VEC4 with
 /// non-negative weights on joints below the skin's `njoints`.
-void check_skinned_primitive(const gltf::Document& doc, const json& attrs, const std::string& where,
-                             std::size_t njoints) {
-  if (attrs.contains("POSITION")) {
+void check_skinned_primitive(const tinygltf::Model& model, const std::map<std::string, int>& attrs,
+                             const std::string& where, std::size_t njoints) {
+  if (attrs.count("POSITION")) {
     int comps = 0;
     const std::vector<double> pos =
-        gltf::read_accessor(doc, attrs["POSITION"].get<int>(), &comps, where + " POSITION");
+        gltf::read_accessor(model, attrs.at("POSITION"), &comps, where + " POSITION");
     for (std::size_t i = 0; i < pos.size(); ++i)
       require(std::isfinite(pos[i]), where + " vertex " + std::to_string(i / 3), "position is not finite",
               "fix the mesh and export again");
@@ -206,13 +151,13 @@ void check_skinned_primitive(const gltf::Document& doc, const json& attrs, const
   for (int set = 0;; ++set) {
     const std::string jn = "JOINTS_" + std::to_string(set);
     const std::string wn = "WEIGHTS_" + std::to_string(set);
-    if (!attrs.contains(jn) && !attrs.contains(wn)) break;
-    require(attrs.contains(jn) && attrs.contains(wn), where, jn + " and " + wn + " must come together",
+    if (!attrs.count(jn) && !attrs.count(wn)) break;
+    require(attrs.count(jn) && attrs.count(wn), where, jn + " and " + wn + " must come together",
             "fix the file or export it again");
     int jc = 0;
     int wc = 0;
-    const std::vector<double> jv = gltf::read_accessor(doc, attrs[jn].get<int>(), &jc, where + " " + jn);
-    const std::vector<double> wv = gltf::read_accessor(doc, attrs[wn].get<int>(), &wc, where + " " + wn);
+    const std::vector<double> jv = gltf::read_accessor(model, attrs.at(jn), &jc, where + " " + jn);
+    const std::vector<double> wv = gltf::read_accessor(model, attrs.at(wn), &wc, where + " " + wn);
     require(jc == 4 && wc == 4 && jv.size() == wv.size(), where,
             jn + "/" + wn + " are not VEC4 of equal count", "fix the file or export it again");
     for (std::size_t i = 0; i < wv.size(); ++i) {
@@ -228,45 +173,37 @@ void check_skinned_primitive(const gltf::Document& doc, const json& attrs, const
 }
 
 /// Checks every node that has a mesh and a skin, and each of its mesh's primitives.
-void check_skinned_nodes(const gltf::Document& doc, const std::string& path, const json& nodes,
-                         const json& skins, const json& meshes, LoadReport& report) {
-  const json empty = json::array();
-  for (std::size_t n = 0; n < nodes.size(); ++n) {
-    const json& node = nodes[n];
-    if (!node.contains("mesh") || !node.contains("skin")) continue;
-    const std::size_t m = node["mesh"].get<std::size_t>();
-    const std::size_t s = node["skin"].get<std::size_t>();
-    require(m < meshes.size() && s < skins.size(), path + ": node " + quote(gltf_node_name(nodes, n)),
+void check_skinned_nodes(const tinygltf::Model& model, const std::string& path, LoadReport& report) {
+  for (std::size_t n = 0; n < model.nodes.size(); ++n) {
+    const tinygltf::Node& node = model.nodes[n];
+    if (node.mesh < 0 || node.skin < 0) continue;
+    const auto m = static_cast<std::size_t>(node.mesh);
+    const auto s = static_cast<std::size_t>(node.skin);
+    require(m < model.meshes.size() && s < model.skins.size(),
+            path + ": node " + quote(gltf_node_name(model.nodes, n)),
             "names a mesh or skin that does not exist", "fix the file or export it again");
-    if (node.contains("matrix") || node.contains("translation") || node.contains("rotation") ||
-        node.contains("scale"))
-      report.warnings.push_back("node " + quote(gltf_node_name(nodes, n)) +
+    if (!node.matrix.empty() || !node.translation.empty() || !node.rotation.empty() || !node.scale.empty())
+      report.warnings.push_back("node " + quote(gltf_node_name(model.nodes, n)) +
                                 " has a transform; it is ignored because the mesh is skinned (glTF rule)");
-    const std::size_t njoints = skins[s]["joints"].size();
-    const json& prims = meshes[m].value("primitives", empty);
-    const std::string mesh_name = meshes[m].value("name", "meshes[" + std::to_string(m) + "]");
-    for (std::size_t p = 0; p < prims.size(); ++p) {
-      const json& attrs = prims[p].value("attributes", json::object());
+    const std::size_t njoints = model.skins[s].joints.size();
+    const tinygltf::Mesh& mesh = model.meshes[m];
+    const std::string mesh_name = mesh.name.empty() ? "meshes[" + std::to_string(m) + "]" : mesh.name;
+    for (std::size_t p = 0; p < mesh.primitives.size(); ++p) {
       const std::string where = path + ": mesh " + quote(mesh_name) + " primitive " + std::to_string(p);
-      check_skinned_primitive(doc, attrs, where, njoints);
+      check_skinned_primitive(model, mesh.primitives[p].attributes, where, njoints);
     }
   }
 }
 
-GltfInfo check_gltf(const std::string& path, LoadReport& report) {
-  const gltf::Document doc = gltf::read_document(path);
-  const json& j = doc.json;
+GltfInfo check_gltf(const tinygltf::Model& model, const std::string& path, LoadReport& report) {
   GltfInfo info;
-  const json empty = json::array();
-  const json& nodes = j.contains("nodes") && j["nodes"].is_array() ? j["nodes"] : empty;
-  const json& skins = j.contains("skins") && j["skins"].is_array() ? j["skins"] : empty;
-  const json& meshes = j.contains("meshes") && j["meshes"].is_array() ? j["meshes"] : empty;
-  unique_node_names(nodes, info);
-  check_skins(doc, path, nodes, skins, info);
-  check_skinned_nodes(doc, path, nodes, skins, meshes, report);
-  bool patch = !info.file_names.empty();
-  for (const json& skin : skins) patch = patch || !skin.contains("inverseBindMatrices");
-  if (patch) info.patched = patch_for_assimp(doc, info, report);
+  unique_node_names(model.nodes, info);
+  check_skins(model, path, info);
+  check_skinned_nodes(model, path, report);
+  for (std::size_t s = 0; s < model.skins.size(); ++s)
+    if (model.skins[s].inverseBindMatrices < 0)
+      report.warnings.push_back("skin " + std::to_string(s) +
+                                " has no inverse bind matrices: identities (glTF default)");
   if (!info.file_names.empty())
     report.warnings.push_back(
         std::to_string(info.file_names.size()) + " node(s) share a name with another (first " +
@@ -522,6 +459,7 @@ class Loader {
   Rig load();
 
  private:
+  void read_with_assimp();
   int node_named(const std::string& name, const std::string& what) const;
   Rig load_skeleton();
   void select_meshes();
@@ -549,6 +487,7 @@ class Loader {
   LoadReport& report_;
   GltfInfo gltf_;
   Assimp::Importer importer_;
+  std::unique_ptr<aiScene> own_scene_;  ///< glTF: the scene built from the tinygltf model
   const aiScene* scene_{nullptr};
   Nodes nodes_;
   std::vector<MeshUse> meshes_;
@@ -844,30 +783,36 @@ void Loader::append_mesh(const MeshUse& m, bool weights, FileMesh& file) {
   if (weights) append_weights(m, local_to_out, file);
 }
 
-/// Appends the triangles of `m` and the vertices they use (in rig rest space); returns the
-/// mesh's vertex -> output vertex map (-1: unused).
+/// Appends the triangles of `m` and the vertices they use (in rig rest space, in the file's
+/// vertex order: a point cache of the output vertices fits the file); returns the mesh's
+/// vertex -> output vertex map (-1: unused).
 std::vector<int> Loader::append_triangles(const MeshUse& m, FileMesh& file) const {
   const aiMesh* mesh = m.mesh;
   std::vector<int> local_to_out(mesh->mNumVertices, -1);
   for (unsigned f = 0; f < mesh->mNumFaces; ++f) {
     const aiFace& face = mesh->mFaces[f];
     if (face.mNumIndices != 3) continue;
-    Eigen::Vector3i t;
     for (int k = 0; k < 3; ++k) {
       const unsigned v = face.mIndices[k];
       require(v < mesh->mNumVertices, path_ + ": mesh " + quote(m.name) + " face " + std::to_string(f),
               "vertex index out of range", "fix the mesh");
-      if (local_to_out[v] < 0) {
-        const Eigen::Vector3d p =
-            m.to_scene * Eigen::Vector3d(mesh->mVertices[v].x, mesh->mVertices[v].y, mesh->mVertices[v].z);
-        require(p.allFinite(), path_ + ": mesh " + quote(m.name) + " vertex " + std::to_string(v),
-                "position is not finite", "fix the mesh and export again");
-        local_to_out[v] = static_cast<int>(file.pos.size());
-        file.pos.push_back(p.cast<float>());
-      }
-      t[k] = local_to_out[v];
+      local_to_out[v] = 0;  // used
     }
-    file.tris.push_back(t);
+  }
+  for (unsigned v = 0; v < mesh->mNumVertices; ++v) {
+    if (local_to_out[v] < 0) continue;
+    const Eigen::Vector3d p =
+        m.to_scene * Eigen::Vector3d(mesh->mVertices[v].x, mesh->mVertices[v].y, mesh->mVertices[v].z);
+    require(p.allFinite(), path_ + ": mesh " + quote(m.name) + " vertex " + std::to_string(v),
+            "position is not finite", "fix the mesh and export again");
+    local_to_out[v] = static_cast<int>(file.pos.size());
+    file.pos.push_back(p.cast<float>());
+  }
+  for (unsigned f = 0; f < mesh->mNumFaces; ++f) {
+    const aiFace& face = mesh->mFaces[f];
+    if (face.mNumIndices == 3)
+      file.tris.emplace_back(local_to_out[face.mIndices[0]], local_to_out[face.mIndices[1]],
+                             local_to_out[face.mIndices[2]]);
   }
   return local_to_out;
 }
@@ -1093,6 +1038,29 @@ std::vector<Affine> Loader::joint_pose(const std::vector<Affine>& local,
   return pose;
 }
 
+/// FBX, COLLADA and the other formats: assimp's scene.
+void Loader::read_with_assimp() {
+  importer_.SetPropertyBool(AI_CONFIG_IMPORT_FBX_PRESERVE_PIVOTS, false);
+  try {
+    scene_ = importer_.ReadFile(path_, aiProcess_Triangulate | aiProcess_ValidateDataStructure);
+    const std::string error = importer_.GetErrorString();
+    if (scene_ == nullptr && error.rfind("Validation failed", 0) == 0) {
+      // assimp's own consistency check is stricter than the rig needs (e.g. key times past the
+      // animation's declared duration); the loader checks what it uses itself.
+      scene_ = importer_.ReadFile(path_, aiProcess_Triangulate);
+      if (scene_ != nullptr) report_.warnings.push_back("assimp: " + error + " (loaded without that check)");
+    }
+  } catch (const InputError&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw InputError(path_ + ": assimp failed: " + e.what() +
+                     "; check that it is a valid glTF 2.0, FBX or COLLADA file");
+  }
+  require(scene_ != nullptr && scene_->mRootNode != nullptr, path_,
+          std::string("assimp cannot read it: ") + importer_.GetErrorString(),
+          "check that it is a valid glTF 2.0, FBX or COLLADA file (export it again)");
+}
+
 Rig Loader::load() {
   rig_.name = path_;
   require(options_.fps > 0 && std::isfinite(options_.fps), path_ + ": LoadOptions::fps",
@@ -1106,56 +1074,16 @@ Rig Loader::load() {
   const std::string ext = gltf::extension(path_);
   report_.format = ext.empty() ? std::string() : ext.substr(1);
   if (ext == ".gltf" || ext == ".glb") {
-    try {
-      gltf_ = check_gltf(path_, report_);
-    } catch (const json::exception& e) {
-      throw InputError(path_ + ": glTF: " + e.what() + "; fix the file or export it again");
-    }
+    const tinygltf::Model model = gltf::read_model(path_, &report_.warnings);
+    gltf_ = check_gltf(model, path_, report_);
+    own_scene_ = gltf::to_ai_scene(model, gltf_.node_names, path_);
+    scene_ = own_scene_.get();
+  } else {
+    read_with_assimp();
   }
-
-  importer_.SetPropertyBool(AI_CONFIG_IMPORT_FBX_PRESERVE_PIVOTS, false);
-  try {
-    auto read = [&](const std::string& file) {
-      scene_ = importer_.ReadFile(file, aiProcess_Triangulate | aiProcess_ValidateDataStructure);
-      const std::string error = importer_.GetErrorString();
-      if (scene_ == nullptr && error.rfind("Validation failed", 0) == 0) {
-        // assimp's own consistency check is stricter than the rig needs (e.g. key times past the
-        // animation's declared duration); the loader checks what it uses itself.
-        scene_ = importer_.ReadFile(file, aiProcess_Triangulate);
-        if (scene_ != nullptr)
-          report_.warnings.push_back("assimp: " + error + " (loaded without that check)");
-      }
-    };
-    if (gltf_.patched.empty()) {
-      read(path_);
-    } else {
-      std::random_device rd;
-      const fs::path dir =
-          fs::temp_directory_path() / ("isokit-gltf-" + std::to_string(rd()) + std::to_string(rd()));
-      fs::create_directories(dir);
-      struct Cleanup {
-        fs::path dir;
-        ~Cleanup() {
-          std::error_code ignored;
-          fs::remove_all(dir, ignored);
-        }
-      } cleanup{dir};
-      const std::string copy = (dir / "patched.gltf").string();
-      write_text_file_atomically(copy, gltf_.patched);
-      read(copy);
-    }
-  } catch (const InputError&) {
-    throw;
-  } catch (const std::exception& e) {
-    throw InputError(path_ + ": assimp failed: " + e.what() +
-                     "; check that it is a valid glTF 2.0, FBX or COLLADA file");
-  }
-  require(scene_ != nullptr && scene_->mRootNode != nullptr, path_,
-          std::string("assimp cannot read it: ") + importer_.GetErrorString(),
-          "check that it is a valid glTF 2.0, FBX or COLLADA file (export it again)");
   nodes_ = collect_nodes(scene_, path_);
   if (options_.skeleton_only) return load_skeleton();
-  require(!(scene_->mFlags & AI_SCENE_FLAGS_INCOMPLETE), path_, "assimp read an incomplete scene",
+  require(!(scene_->mFlags & AI_SCENE_FLAGS_INCOMPLETE), path_, "the scene is incomplete (no mesh)",
           "export the file again with its meshes (or read it as a clip file: --clip-file)");
   select_meshes();
   bind_pose();

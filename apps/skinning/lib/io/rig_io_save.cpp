@@ -1,10 +1,12 @@
 // SPDX-License-Identifier: MIT
-// Writers of the rig I/O: save_rig (skinned glTF 2.0), write_baked_glb (morph-target animation)
-// and write_ply. Own glTF writer (gltf_io.h); every file goes through a temporary file.
+// Writers of the rig I/O: save_rig (skinned glTF 2.0), write_baked_glb (morph-target animation),
+// write_pc2 (point cache) and write_ply. glTF documents are tinygltf models (gltf_io.h); every
+// file goes through a temporary file.
 #include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <map>
 #include <ostream>
 #include <set>
 
@@ -17,7 +19,8 @@ namespace isokit::skinning {
 
 namespace {
 
-using nlohmann::json;
+/// glTF attribute name -> accessor index.
+using Attributes = std::map<std::string, int>;
 
 // Output (unwelded) vertices and their primitives, resolved from `Rig::output`.
 struct OutputView {
@@ -143,14 +146,20 @@ void write_animation(gltf::Builder& b, const Rig& rig, const Clip& clip, const s
   std::vector<float> times(nf);
   for (std::size_t f = 0; f < nf; ++f) times[f] = static_cast<float>(static_cast<double>(f) / clip.fps);
   const int input = b.add_floats(times.data(), nf, "SCALAR", true);
-  json samplers = json::array();
-  json channels = json::array();
+  tinygltf::Animation anim;
+  anim.name = clip.name;
   auto add = [&](std::size_t joint, const char* target_path, const std::vector<float>& values,
                  const char* type) {
-    const int output = b.add_floats(values.data(), nf, type, false);
-    samplers.push_back({{"input", input}, {"output", output}, {"interpolation", "LINEAR"}});
-    channels.push_back(
-        {{"sampler", samplers.size() - 1}, {"target", {{"node", joint}, {"path", target_path}}}});
+    tinygltf::AnimationSampler sampler;
+    sampler.input = input;
+    sampler.output = b.add_floats(values.data(), nf, type, false);
+    sampler.interpolation = "LINEAR";
+    anim.samplers.push_back(sampler);
+    tinygltf::AnimationChannel channel;
+    channel.sampler = static_cast<int>(anim.samplers.size()) - 1;
+    channel.target_node = static_cast<int>(joint);
+    channel.target_path = target_path;
+    anim.channels.push_back(channel);
   };
   for (std::size_t j = 0; j < nj; ++j) {
     std::vector<Eigen::Vector3d> t(nf);
@@ -173,7 +182,7 @@ void write_animation(gltf::Builder& b, const Rig& rig, const Clip& clip, const s
       r_const = r_const && same_rot(r[f], rest[j].r);
     }
     if (!t_const) add(j, "translation", flat(t), "VEC3");
-    if (!r_const || (j + 1 == nj && channels.empty())) {  // an animation needs one channel
+    if (!r_const || (j + 1 == nj && anim.channels.empty())) {  // an animation needs one channel
       std::vector<float> q;
       for (const auto& x : r)
         q.insert(q.end(), {static_cast<float>(x.x()), static_cast<float>(x.y()), static_cast<float>(x.z()),
@@ -182,7 +191,7 @@ void write_animation(gltf::Builder& b, const Rig& rig, const Clip& clip, const s
     }
     if (!s_const) add(j, "scale", flat(s), "VEC3");
   }
-  b.doc()["animations"].push_back({{"name", clip.name}, {"samplers", samplers}, {"channels", channels}});
+  b.model().animations.push_back(anim);
 }
 
 /// Every joint needs a unique, non-empty name: files bind bones by name.
@@ -201,30 +210,35 @@ struct JointNodes {
 };
 
 /// Writes the scene: joint nodes 0..nj-1, then the mesh node.
-JointNodes add_joint_nodes(json& d, const Rig& rig, const std::string& path) {
+JointNodes add_joint_nodes(tinygltf::Model& d, const Rig& rig, const std::string& path) {
   const std::size_t nj = rig.joints.size();
   JointNodes jn;
   std::vector<Trs>& rest = jn.rest;
   std::vector<int>& roots = jn.roots;
   rest.resize(nj);
-  json nodes = json::array();
+  std::vector<tinygltf::Node>& nodes = d.nodes;
   for (std::size_t j = 0; j < nj; ++j) {
     rest[j] = to_trs(rig.joints[j].rest_local, path + ": joint '" + rig.joints[j].name + "' rest transform");
-    json node = {{"name", rig.joints[j].name}};
-    node["translation"] = {rest[j].t.x(), rest[j].t.y(), rest[j].t.z()};
-    node["rotation"] = {rest[j].r.x(), rest[j].r.y(), rest[j].r.z(), rest[j].r.w()};
-    node["scale"] = {rest[j].s.x(), rest[j].s.y(), rest[j].s.z()};
+    tinygltf::Node node;
+    node.name = rig.joints[j].name;
+    node.translation = {rest[j].t.x(), rest[j].t.y(), rest[j].t.z()};
+    node.rotation = {rest[j].r.x(), rest[j].r.y(), rest[j].r.z(), rest[j].r.w()};
+    node.scale = {rest[j].s.x(), rest[j].s.y(), rest[j].s.z()};
     nodes.push_back(node);
     if (rig.joints[j].parent < 0) roots.push_back(static_cast<int>(j));
   }
   for (std::size_t j = 0; j < nj; ++j)
     if (rig.joints[j].parent >= 0)
-      nodes[static_cast<std::size_t>(rig.joints[j].parent)]["children"].push_back(j);
-  nodes.push_back({{"name", "isokit_mesh"}, {"mesh", 0}, {"skin", 0}});
+      nodes[static_cast<std::size_t>(rig.joints[j].parent)].children.push_back(static_cast<int>(j));
+  tinygltf::Node mesh_node;
+  mesh_node.name = "isokit_mesh";
+  mesh_node.mesh = 0;
+  mesh_node.skin = 0;
+  nodes.push_back(mesh_node);
   roots.push_back(static_cast<int>(nj));
-  d["nodes"] = nodes;
-  d["scene"] = 0;
-  d["scenes"] = json::array({{{"nodes", roots}}});
+  d.defaultScene = 0;
+  d.scenes.resize(1);
+  d.scenes[0].nodes = roots;
   return jn;
 }
 
@@ -260,7 +274,7 @@ struct SkinnedVertices {
 
 /// Adds JOINTS_s / WEIGHTS_s for the primitive's vertices `verts` (u8 joints up to 256 joints).
 void add_weight_sets(gltf::Builder& b, const SkinnedVertices& sv, const std::vector<int>& verts,
-                     json& attrs) {
+                     Attributes& attrs) {
   const std::size_t n = verts.size();
   for (int s = 0; s < sv.sets; ++s) {
     std::vector<std::uint16_t> jv(4 * n, 0);
@@ -288,7 +302,7 @@ void add_weight_sets(gltf::Builder& b, const SkinnedVertices& sv, const std::vec
 
 /// The primitive of triangles [f0, f1): its own vertices (POSITION, NORMAL, weight sets) and
 /// indices.
-json skinned_primitive(gltf::Builder& b, const SkinnedVertices& sv, int f0, int f1) {
+tinygltf::Primitive skinned_primitive(gltf::Builder& b, const SkinnedVertices& sv, int f0, int f1) {
   const OutputView& out = sv.out;
   std::vector<int> verts;
   for (int f = f0; f < f1; ++f)
@@ -306,7 +320,8 @@ json skinned_primitive(gltf::Builder& b, const SkinnedVertices& sv, int f0, int 
       ppos[3 * i + k] = sv.pos[3 * static_cast<std::size_t>(verts[i]) + k];
       pnrm[3 * i + k] = sv.nrm[3 * static_cast<std::size_t>(verts[i]) + k];
     }
-  json attrs;
+  tinygltf::Primitive prim;
+  Attributes& attrs = prim.attributes;
   attrs["POSITION"] = b.add_floats(ppos.data(), n, "VEC3", true, gltf::kArrayBuffer);
   attrs["NORMAL"] = b.add_floats(pnrm.data(), n, "VEC3", false, gltf::kArrayBuffer);
   add_weight_sets(b, sv, verts, attrs);
@@ -314,7 +329,9 @@ json skinned_primitive(gltf::Builder& b, const SkinnedVertices& sv, int f0, int 
   idx.reserve(3 * static_cast<std::size_t>(f1 - f0));
   for (int f = f0; f < f1; ++f)
     for (int k = 0; k < 3; ++k) idx.push_back(local[static_cast<std::size_t>(out.triangles(f, k))]);
-  return {{"attributes", attrs}, {"indices", add_indices(b, idx, n)}, {"mode", 4}};
+  prim.indices = add_indices(b, idx, n);
+  prim.mode = TINYGLTF_MODE_TRIANGLES;
+  return prim;
 }
 
 /// The skin: inverse bind matrices (column-major), the joint nodes and, with one root joint,
@@ -328,20 +345,15 @@ void add_skin(gltf::Builder& b, const Rig& rig, const std::vector<int>& roots) {
       for (int r = 0; r < 4; ++r)
         ibm[16 * j + static_cast<std::size_t>(4 * c + r)] = static_cast<float>(m(r, c));
   }
-  json skin = {{"inverseBindMatrices", b.add_floats(ibm.data(), nj, "MAT4", false)}};
-  std::vector<std::size_t> joint_nodes(nj);
-  for (std::size_t j = 0; j < nj; ++j) joint_nodes[j] = j;
-  skin["joints"] = joint_nodes;
-  if (roots.size() == 2) skin["skeleton"] = roots.front();
-  b.doc()["skins"] = json::array({skin});
+  tinygltf::Skin skin;
+  skin.inverseBindMatrices = b.add_floats(ibm.data(), nj, "MAT4", false);
+  for (std::size_t j = 0; j < nj; ++j) skin.joints.push_back(static_cast<int>(j));
+  if (roots.size() == 2) skin.skeleton = roots.front();
+  b.model().skins = {skin};
 }
 
-/// Checks the arguments of write_baked_glb.
-void check_bake(const Rig& rig, const std::vector<track::Positions>& frames, double fps,
-                const std::string& path) {
-  require(gltf::extension(path) == ".glb", path, "extension must be .glb", "name the file *.glb");
-  require(fps > 0 && std::isfinite(fps), path + ": fps", "must be > 0 (got " + format_number(fps) + ")",
-          "pass the frame rate of the frames");
+/// Checks baked frames: at least one, each finite with the rig's welded vertex count.
+void check_frames(const Rig& rig, const std::vector<track::Positions>& frames, const std::string& path) {
   require(!frames.empty(), path + ": frames", "none given", "bake at least one frame");
   validate(rig);
   const Eigen::Index nw = rig.rest.rows();
@@ -352,6 +364,26 @@ void check_bake(const Rig& rig, const std::vector<track::Positions>& frames, dou
     require(frames[k].allFinite(), path + ": frame " + std::to_string(k), "has non-finite positions",
             "fix the deformation before baking");
   }
+}
+
+/// Checks the arguments of write_baked_glb.
+void check_bake(const Rig& rig, const std::vector<track::Positions>& frames, double fps,
+                const std::string& path) {
+  require(gltf::extension(path) == ".glb", path, "extension must be .glb", "name the file *.glb");
+  require(fps > 0 && std::isfinite(fps), path + ": fps", "must be > 0 (got " + format_number(fps) + ")",
+          "pass the frame rate of the frames");
+  check_frames(rig, frames, path);
+}
+
+/// Appends `u` to `buf` as 4 little-endian bytes.
+void put_u32(std::vector<char>& buf, std::uint32_t u) {
+  for (int b = 0; b < 4; ++b) buf.push_back(static_cast<char>((u >> (8 * b)) & 0xFF));
+}
+
+void put_f32(std::vector<char>& buf, float x) {
+  std::uint32_t u;
+  std::memcpy(&u, &x, 4);
+  put_u32(buf, u);
 }
 
 /// Adds morph-target delta accessors of `nout` VEC3: sparse when that is smaller than the dense
@@ -389,10 +421,17 @@ void add_morph_animation(gltf::Builder& b, std::size_t nk, double fps, const Bak
   const int input = b.add_floats(times.data(), nk, "SCALAR", true);
   const int output = b.add_floats(weights.data(), nk * nk, "SCALAR", false);
   const char* interp = options.interpolation == MorphInterpolation::kStep ? "STEP" : "LINEAR";
-  b.doc()["animations"] = json::array(
-      {{{"name", options.clip_name},
-        {"samplers", json::array({{{"input", input}, {"output", output}, {"interpolation", interp}}})},
-        {"channels", json::array({{{"sampler", 0}, {"target", {{"node", 0}, {"path", "weights"}}}}})}}});
+  tinygltf::Animation anim;
+  anim.name = options.clip_name;
+  anim.samplers.resize(1);
+  anim.samplers[0].input = input;
+  anim.samplers[0].output = output;
+  anim.samplers[0].interpolation = interp;
+  anim.channels.resize(1);
+  anim.channels[0].sampler = 0;
+  anim.channels[0].target_node = 0;
+  anim.channels[0].target_path = "weights";
+  b.model().animations = {anim};
 }
 
 }  // namespace
@@ -407,7 +446,7 @@ void save_rig(const Rig& rig, const std::string& path) {
   const OutputView out = output_view(rig, path);
 
   gltf::Builder b;
-  json& d = b.doc();
+  tinygltf::Model& d = b.model();
   const JointNodes joint_nodes = add_joint_nodes(d, rig, path);
 
   // Vertex data over output vertices.
@@ -419,13 +458,13 @@ void save_rig(const Rig& rig, const std::string& path) {
   if (weighted) infl = sorted_influences(rig, sets);
   require(nj <= 65536, path, "has more than 65536 joints", "glTF joints are 16-bit indices");
   const SkinnedVertices sv{out, pos, nrm, infl, sets, nj};
-  json primitives = json::array();
+  d.meshes.resize(1);
+  d.meshes[0].name = "isokit_mesh";
   for (std::size_t p = 0; p + 1 < out.primitive_offsets.size(); ++p) {
     const int f0 = out.primitive_offsets[p];
     const int f1 = out.primitive_offsets[p + 1];
-    if (f0 != f1) primitives.push_back(skinned_primitive(b, sv, f0, f1));
+    if (f0 != f1) d.meshes[0].primitives.push_back(skinned_primitive(b, sv, f0, f1));
   }
-  d["meshes"] = json::array({{{"name", "isokit_mesh"}, {"primitives", primitives}}});
 
   add_skin(b, rig, joint_nodes.roots);
   for (const Clip& clip : rig.clips)
@@ -444,10 +483,11 @@ void write_baked_glb(const Rig& rig, const std::vector<track::Positions>& frames
       std::min<std::uint64_t>(options.max_bytes, std::numeric_limits<std::uint32_t>::max());
 
   gltf::Builder b;
-  json& d = b.doc();
+  tinygltf::Model& d = b.model();
   const std::vector<float> rest = output_positions(rig.rest, out.to_welded);
   const std::vector<float> rest_n = vertex_normals(rest, out.triangles);
-  json attrs;
+  tinygltf::Primitive primitive;
+  Attributes& attrs = primitive.attributes;
   attrs["POSITION"] = b.add_floats(rest.data(), nout, "VEC3", true, gltf::kArrayBuffer);
   if (options.normals) attrs["NORMAL"] = b.add_floats(rest_n.data(), nout, "VEC3", false, gltf::kArrayBuffer);
   std::vector<std::uint32_t> idx;
@@ -461,8 +501,7 @@ void write_baked_glb(const Rig& rig, const std::vector<track::Positions>& frames
       options.sparse ? static_cast<float>(options.sparse_epsilon * box.diagonal().norm()) : 0.0f;
   const float nrm_eps = options.sparse ? static_cast<float>(options.sparse_epsilon) : 0.0f;
   const DeltaWriter deltas{b, nout, options.sparse};
-  json targets = json::array();
-  json target_names = json::array();
+  tinygltf::Value::Array target_names;
   std::vector<float> delta(3 * nout);
   std::vector<float> posed(3 * nout);
   for (std::size_t k = 0; k < nk; ++k) {
@@ -472,17 +511,17 @@ void write_baked_glb(const Rig& rig, const std::vector<track::Positions>& frames
         posed[at] = frames[k](out.to_welded[i], c);
         delta[at] = posed[at] - rest[at];
       }
-    json target;
+    Attributes target;
     target["POSITION"] = deltas.add(delta, pos_eps);
     if (options.normals) {
       const std::vector<float> n = vertex_normals(posed, out.triangles);
       for (std::size_t i = 0; i < 3 * nout; ++i) delta[i] = n[i] - rest_n[i];
       target["NORMAL"] = deltas.add(delta, nrm_eps);
     }
-    targets.push_back(target);
+    primitive.targets.push_back(target);
     char name[32];
     std::snprintf(name, sizeof name, "frame_%05zu", k);
-    target_names.push_back(name);
+    target_names.emplace_back(std::string(name));
     require(
         b.binary_size() <= limit, path,
         "the baked file passes " + std::to_string(limit) + " bytes at frame " + std::to_string(k) + " of " +
@@ -490,20 +529,52 @@ void write_baked_glb(const Rig& rig, const std::vector<track::Positions>& frames
         "bake fewer frames, turn normals off, raise BakedGlbOptions::max_bytes (GLB cap 4 GiB), or write PLY "
         "frames");
   }
-  std::vector<float> initial(nk, 0.0f);
-  initial[0] = 1.0f;
-  json primitive = {{"attributes", attrs}, {"indices", indices}, {"mode", 4}, {"targets", targets}};
-  d["meshes"] = json::array({{{"name", options.clip_name},
-                              {"primitives", json::array({primitive})},
-                              {"weights", initial},
-                              {"extras", {{"targetNames", target_names}}}}});
-  d["nodes"] = json::array({{{"name", options.clip_name}, {"mesh", 0}}});
-  d["scene"] = 0;
-  d["scenes"] = json::array({{{"nodes", {0}}}});
+  primitive.indices = indices;
+  primitive.mode = TINYGLTF_MODE_TRIANGLES;
+  d.meshes.resize(1);
+  d.meshes[0].name = options.clip_name;
+  d.meshes[0].primitives = {primitive};
+  d.meshes[0].weights.assign(nk, 0.0);
+  d.meshes[0].weights[0] = 1.0;
+  d.meshes[0].extras =
+      tinygltf::Value(tinygltf::Value::Object{{"targetNames", tinygltf::Value(target_names)}});
+  d.nodes.resize(1);
+  d.nodes[0].name = options.clip_name;
+  d.nodes[0].mesh = 0;
+  d.defaultScene = 0;
+  d.scenes.resize(1);
+  d.scenes[0].nodes = {0};
   add_morph_animation(b, nk, fps, options);
   require(b.binary_size() <= limit, path, "the baked file passes " + std::to_string(limit) + " bytes",
           "bake fewer frames or raise BakedGlbOptions::max_bytes");
   b.write(path, true);
+}
+
+void write_pc2(const Rig& rig, const std::vector<track::Positions>& frames, const std::string& path) {
+  require(gltf::extension(path) == ".pc2", path, "extension must be .pc2", "name the file *.pc2");
+  check_frames(rig, frames, path);
+  const OutputView out = output_view(rig, path);
+  const std::size_t nout = out.to_welded.size();
+  constexpr auto kMax = static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max());
+  require(nout <= kMax && frames.size() <= kMax, path, "has more points or frames than PC2's int32 counts",
+          "bake fewer frames");
+  write_stream_atomically(path, [&](std::ostream& stream) {
+    std::vector<char> buf;
+    const char signature[12] = "POINTCACHE2";  // 11 characters and the terminating zero
+    buf.insert(buf.end(), signature, signature + 12);
+    put_u32(buf, 1);                                          // version
+    put_u32(buf, static_cast<std::uint32_t>(nout));           // numPoints
+    put_f32(buf, 0.0f);                                       // startFrame
+    put_f32(buf, 1.0f);                                       // sampleRate: one sample per frame
+    put_u32(buf, static_cast<std::uint32_t>(frames.size()));  // numSamples
+    stream.write(buf.data(), static_cast<std::streamsize>(buf.size()));
+    for (const track::Positions& frame : frames) {
+      buf.clear();
+      for (const int w : out.to_welded)
+        for (int k = 0; k < 3; ++k) put_f32(buf, frame(w, k));
+      stream.write(buf.data(), static_cast<std::streamsize>(buf.size()));
+    }
+  });
 }
 
 void write_ply(const std::string& path, const track::Positions& positions,
@@ -519,21 +590,13 @@ void write_ply(const std::string& path, const track::Positions& positions,
         << "\nproperty list uchar int vertex_indices\nend_header\n";
     std::vector<char> buf;
     buf.reserve(static_cast<std::size_t>(std::max<Eigen::Index>(nv * 12, triangles.rows() * 13)));
-    auto put = [&](std::uint32_t u) {
-      for (int b = 0; b < 4; ++b) buf.push_back(static_cast<char>((u >> (8 * b)) & 0xFF));
-    };
     for (Eigen::Index v = 0; v < nv; ++v)
-      for (int k = 0; k < 3; ++k) {
-        std::uint32_t u;
-        const float x = positions(v, k);
-        std::memcpy(&u, &x, 4);
-        put(u);
-      }
+      for (int k = 0; k < 3; ++k) put_f32(buf, positions(v, k));
     out.write(buf.data(), static_cast<std::streamsize>(buf.size()));
     buf.clear();
     for (Eigen::Index f = 0; f < triangles.rows(); ++f) {
       buf.push_back(3);
-      for (int k = 0; k < 3; ++k) put(static_cast<std::uint32_t>(triangles(f, k)));
+      for (int k = 0; k < 3; ++k) put_u32(buf, static_cast<std::uint32_t>(triangles(f, k)));
     }
     out.write(buf.data(), static_cast<std::streamsize>(buf.size()));
   });

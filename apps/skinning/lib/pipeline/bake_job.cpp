@@ -23,9 +23,16 @@ std::string bend_description(const AnimationRequest& request, double max_step_ra
   return text;
 }
 
+void make_folder(const std::filesystem::path& dir, const std::string& path) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  require(!ec, path, "cannot create the folder '" + dir.string() + "' (" + ec.message() + ")",
+          "choose a path in a writable folder");
+}
+
 void make_parent(const std::string& path) {
   const std::filesystem::path p(path);
-  if (p.has_parent_path()) std::filesystem::create_directories(p.parent_path());
+  if (p.has_parent_path()) make_folder(p.parent_path(), path);
 }
 
 std::string frame_ply_name(std::size_t frame) {
@@ -181,16 +188,33 @@ const BakeResult& main_result(const std::vector<BakeResult>& results, Method met
   throw InputError(std::string("bake: no result of method ") + to_string(method));
 }
 
+void check_bake_outputs(const BakeOutputs& outputs) {
+  if (outputs.pc2.empty()) return;
+  const std::string ext = std::filesystem::path(outputs.pc2).extension().string();
+  require(ext == ".pc2" || ext == ".PC2", outputs.pc2, "extension must be .pc2",
+          "name the point cache *.pc2");
+  std::error_code ec;
+  require(!std::filesystem::is_directory(outputs.pc2, ec), outputs.pc2, "is a folder",
+          "give a file path such as out/bake.pc2");
+}
+
 std::vector<std::string> write_bake_outputs(const Rig& rig, const std::vector<BakeResult>& results,
                                             const BakeResult& main, const ReportContext& context,
                                             const std::vector<RenderView>& views,
                                             const BakeOutputs& outputs) {
   std::vector<std::string> written;
+  check_bake_outputs(outputs);
   if (!outputs.glb.empty()) make_parent(outputs.glb);
   if (!outputs.metrics.empty()) make_parent(outputs.metrics);
+  if (!outputs.pc2.empty()) make_parent(outputs.pc2);
+  const std::string frames = " (" + std::to_string(main.frames.size()) + " frames)";
   if (!outputs.glb.empty()) {
     write_baked_glb(rig, main.frames, context.fps, outputs.glb);
-    written.push_back(outputs.glb + " (" + std::to_string(main.frames.size()) + " frames)");
+    written.push_back(outputs.glb + frames);
+  }
+  if (!outputs.pc2.empty()) {
+    write_pc2(rig, main.frames, outputs.pc2);
+    written.push_back(outputs.pc2 + frames);
   }
   if (!outputs.metrics.empty()) {
     write_text_file(outputs.metrics, metrics_json(rig, results, context));
@@ -198,7 +222,7 @@ std::vector<std::string> write_bake_outputs(const Rig& rig, const std::vector<Ba
   }
   if (!outputs.render_dir.empty()) {
     const std::string& dir = outputs.render_dir;
-    std::filesystem::create_directories(dir);
+    make_folder(dir, dir);
     write_comparison_sheet(rig, results, views, rig.name + " — " + context.animation,
                            dir + "/contact_sheet.png");
     for (const BakeResult& r : results)
@@ -208,10 +232,10 @@ std::vector<std::string> write_bake_outputs(const Rig& rig, const std::vector<Ba
     written.push_back(dir + "/contact_sheet.png and one PNG per method and view");
   }
   if (!outputs.ply_dir.empty()) {
-    std::filesystem::create_directories(outputs.ply_dir);
+    make_folder(outputs.ply_dir, outputs.ply_dir);
     for (std::size_t f = 0; f < main.frames.size(); ++f)
       write_ply(outputs.ply_dir + frame_ply_name(f), main.frames[f], rig.triangles);
-    written.push_back(outputs.ply_dir + "/frame_*.ply (" + std::to_string(main.frames.size()) + " frames)");
+    written.push_back(outputs.ply_dir + "/frame_*.ply" + frames);
   }
   return written;
 }

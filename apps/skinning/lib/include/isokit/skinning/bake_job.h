@@ -74,9 +74,15 @@ struct BakeOutputs {
   std::string metrics;     ///< the metrics JSON of every result
   std::string render_dir;  ///< contact sheet and one PNG per method and view
   std::string ply_dir;     ///< one PLY per frame of the main result
+  std::string pc2;         ///< the main result as a PC2 point cache (file vertex order)
 };
 
+/// \throw InputError for a point cache path that is not `*.pc2` or is a folder (cheap: check
+/// before loading a rig; `write_bake_outputs` checks it again before writing anything).
+void check_bake_outputs(const BakeOutputs& outputs);
+
 /// Writes the outputs (parent folders created); returns what was written, one line each.
+/// \throw InputError naming the path that cannot be written.
 std::vector<std::string> write_bake_outputs(const Rig& rig, const std::vector<BakeResult>& results,
                                             const BakeResult& main, const ReportContext& context,
                                             const std::vector<RenderView>& views, const BakeOutputs& outputs);

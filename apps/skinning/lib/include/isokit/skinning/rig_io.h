@@ -1,9 +1,10 @@
 // SPDX-License-Identifier: MIT
 /// \file
-/// Rig files: `load_rig` reads a skinned character (glTF 2.0 .gltf/.glb, FBX, COLLADA .dae) through
-/// assimp; `save_rig` writes a rig as glTF 2.0 (own writer) that `load_rig` reads back with the
-/// same skinning; `write_baked_glb` writes a baked deformation (one morph target per frame) that
-/// any glTF viewer plays; `write_ply` writes one posed mesh. Format details and limits:
+/// Rig files: `load_rig` reads a skinned character (glTF 2.0 .gltf/.glb through tinygltf, FBX and
+/// COLLADA .dae through assimp); `save_rig` writes a rig as glTF 2.0 (through tinygltf) that
+/// `load_rig` reads back with the same skinning; `write_baked_glb` writes a baked deformation (one
+/// morph target per frame) that any glTF viewer plays; `write_pc2` writes it as a point cache
+/// (Blender, 3ds Max); `write_ply` writes one posed mesh. Format details and limits:
 /// docs/skinning-io.md.
 ///
 /// Loading, in short: every skinned mesh (each glTF primitive is one) is merged into one mesh;
@@ -53,7 +54,7 @@ struct LoadOptions {
 /// What `load_rig` found (for the CLI's summary); `warnings` lists everything it changed or
 /// skipped (unskinned meshes, welded vertices with different weights, node pose ≠ bind pose…).
 struct LoadReport {
-  std::string format;        ///< assimp's importer extension ("gltf", "glb", "fbx", "dae")
+  std::string format;        ///< the file's extension ("gltf", "glb", "fbx", "dae")
   int meshes{0};             ///< source meshes (glTF primitives) merged
   int file_vertices{0};      ///< output (unwelded) vertices kept
   int welded_vertices{0};    ///< `Rig::rest.rows()`
@@ -110,6 +111,16 @@ struct BakedGlbOptions {
 /// `max_bytes`, a path not ending in .glb, or an unwritable path.
 void write_baked_glb(const Rig& rig, const std::vector<track::Positions>& frames, double fps,
                      const std::string& path, const BakedGlbOptions& options = {});
+
+/// Writes a baked deformation as a PC2 point cache, the format Blender's Mesh Cache modifier and
+/// 3ds Max's Point Cache read: a 32-byte header ("POINTCACHE2\0", version 1, number of points,
+/// start frame 0, sample rate 1 frame, number of samples), then per frame the output vertices
+/// (`Rig::output`: the file's vertex order, unwelded) as float32 x y z, little endian. Positions
+/// are in the rig's own space and units, as in `write_baked_glb`. `frames[k]` holds the welded
+/// positions of frame k (`#V by 3`, V = `rig.rest.rows()`).
+/// \throw InputError for empty or mis-sized frames, non-finite positions, a path not ending in
+/// .pc2, or an unwritable path (no file is left behind).
+void write_pc2(const Rig& rig, const std::vector<track::Positions>& frames, const std::string& path);
 
 /// Binary little-endian PLY (float x y z; uchar-count int vertex_indices).
 /// \throw InputError for a triangle index out of range or an unwritable path.
