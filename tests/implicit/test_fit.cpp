@@ -203,7 +203,7 @@ TEST_CASE("a fitted limb part closes smoothly at its joint", "[fit]") {
   for (int i = 0; i <= 15; ++i) prof.push_back({L * i / 15, R});
   const MeshPart part = revolve(prof, {0, 0, 0}, {0, 0, L}, 24, false, false, {}, {});
   double worst_closed = 0, worst_open = 0;
-  PartFitOptions paper;  // the paper's closure points (the default picks caps or these by error)
+  PartFitOptions paper;  // the paper's closure points (the default)
   paper.closure = PartFitOptions::Closure::joints;
   PartFitOptions open_opts = paper;
   open_opts.close_start = false;

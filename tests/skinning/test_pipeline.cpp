@@ -289,14 +289,14 @@ TEST_CASE("pipeline: bad input to the skinner is rejected naming the item", "[sk
   CHECK(setup_from_json(R"({"fit": {"capsule_match": 0.5}})", "s.json").capsule_match == 0.5);
   CHECK_THROWS_WITH(setup_from_json(R"({"fit": {"capsule_match": -1}})", "s.json"),
                     Catch::Contains("s.json.fit.capsule_match") && Catch::Contains("[0, 10]"));
-  // Closing parts at their borders and rejecting poor fits (docs/skinning.md): on by default.
+  // Closing parts at their borders and rejecting poor fits (docs/skinning.md): off by default.
   using Closure = isokit::implicit::PartFitOptions::Closure;
-  CHECK(s.fit.closure == Closure::best);
+  CHECK(s.fit.closure == Closure::joints);
   CHECK(s.fit.cap_height == 1.0);
-  CHECK(s.max_fit_error == 1.0);
-  const SkinSetup paper = setup_from_json(R"({"fit": {"closure": "joints", "max_error": 0}})", "s.json");
-  CHECK(paper.fit.closure == Closure::joints);
-  CHECK(paper.max_fit_error == 0.0);
+  CHECK(s.max_fit_error == 0.0);
+  const SkinSetup closer = setup_from_json(R"({"fit": {"closure": "best", "max_error": 1}})", "s.json");
+  CHECK(closer.fit.closure == Closure::best);
+  CHECK(closer.max_fit_error == 1.0);
   CHECK(
       setup_from_json(R"({"fit": {"closure": "border_caps", "cap_height": 0.5}})", "s.json").fit.cap_height ==
       0.5);

@@ -119,7 +119,7 @@ void read_fit(const json& f, const std::string& w, implicit::PartFitOptions& fit
   read(f, "max_error", max_fit_error, w);
   require(std::isfinite(max_fit_error) && max_fit_error >= 0 && max_fit_error <= 100, w + ".max_error",
           "must be in [0, 100] (got " + format_number(max_fit_error) + ")",
-          "use 1 (the default) or 0 (off: keep every fit that solves)");
+          "use 0 (off, the default: keep every fit that solves) or 1");
   read(f, "samples", fit.target_samples, w);
   read(f, "cull_h", fit.cull_h, w);
   read(f, "grid_resolution", fit.grid_resolution, w);
@@ -132,7 +132,7 @@ void read_fit(const json& f, const std::string& w, implicit::PartFitOptions& fit
     const json& c = f.at("closure");
     require(c.is_string() && (c == "best" || c == "joints" || c == "border_caps"), w + ".closure",
             "must be \"best\", \"joints\" or \"border_caps\" (got " + c.dump() + ")",
-            "use \"best\" (the default) or \"joints\" (2013 §4.1)");
+            "use \"joints\" (2013 §4.1, the default) or \"best\"");
     using Closure = implicit::PartFitOptions::Closure;
     fit.closure = c == "joints" ? Closure::joints : c == "border_caps" ? Closure::border_caps : Closure::best;
   }

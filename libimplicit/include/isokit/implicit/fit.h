@@ -59,18 +59,18 @@ struct PartFitOptions {
   /// children and makes contact with them at rest; docs/skinning.md, "fitting").
   double opening_offset = 0.1;
   /// How the fit closes the part where its mesh is open (at its joints, or an open border):
-  /// - `joints` (2013 §4.1, Fig. 3): one point on the bone axis `s` beyond each closed bone end
-  ///   (`close_start`, `close_end`) and one per `MeshPart::openings`;
+  /// - `joints` (default; 2013 §4.1, Fig. 3): one point on the bone axis `s` beyond each closed
+  ///   bone end (`close_start`, `close_end`) and one per `MeshPart::openings`;
   /// - `border_caps` (not in the papers): a dome of samples over each open border loop of the
   ///   part's triangles (`cap_height`), so the surface closes where the part's mesh ends,
   ///   whatever the joints' places; a part without a border gets no closure; `close_start`,
   ///   `close_end` and `openings` are not used;
-  /// - `best` (default; not in the papers): both fits, and the one with the smaller vertex →
-  ///   surface plus surface → part p95 (fit_quality.h; the part closed by a flat fan over each
-  ///   border loop) is kept; where one of them throws, the other.
-  /// docs/skinning.md, "Decision: closing a part at its borders".
+  /// - `best` (not in the papers): both fits, and the one with the smaller `FittedPart::error`
+  ///   is kept; where one of them throws, the other.
+  /// docs/skinning.md, "Decision: closing a part at its borders" (why `joints` stays the default:
+  /// `best` fits the parts closer, but the real-rig evaluation's tracking got worse).
   enum class Closure { joints, border_caps, best };
-  Closure closure = Closure::best;
+  Closure closure = Closure::joints;
   /// Height of a border cap's dome over its loop, as a fraction of the loop's radius, in [0, 2]
   /// (not in the papers; 1, a half sphere, like the paper's closure point `s` beyond a joint:
   /// the cap reaches into the neighbour, so the blend at the joint does not dent; measured in
@@ -106,7 +106,7 @@ Rigid3d bone_frame(const Vec3d& a, const Vec3d& b);
 /// Bone frame used by `fit_part`: origin at `a`, z along `b − a`, x towards the first of
 /// `vertices` (in their order) whose distance to the bone's line is within 1e-4 of the largest,
 /// so that the frame turns with the part: a rotated copy of a rig gets the rotated frames, and
-/// the same sampled grids (not in the papers; docs/skinning.md, "Units and axes"). Without such
+/// the same sampled grids (not in the papers; docs/skinning.md, "The fit frame turns with the part"). Without such
 /// a vertex (all on the line), the world-axis rule above.
 Rigid3d bone_frame(const Vec3d& a, const Vec3d& b, const std::vector<Vec3d>& vertices);
 

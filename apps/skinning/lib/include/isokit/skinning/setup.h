@@ -88,9 +88,10 @@ struct SkinSetup {
   /// filter is tried, then the part shares a touching neighbour's primitive, and the capsule is
   /// the last resort. Such a fit (a patch that is no limb, a part of a few triangles) bulges out
   /// of its part and holds other parts' vertices at rest. 0 = off (the papers: every fit that
-  /// solves is kept). Not in the papers (docs/skinning.md, "Decision: rejecting poor fits"). In
-  /// [0, 100]; default 1. Setup key `fit.max_error`.
-  double max_fit_error{1};
+  /// solves is kept). Not in the papers (docs/skinning.md, "Decision: rejecting poor fits": 1
+  /// fits the shared rigs' parts closest, off by default because tracking got worse on them).
+  /// In [0, 100]; default 0. Setup key `fit.max_error`.
+  double max_fit_error{0};
   int operator_resolution{128};  ///< grid operator resolution per axis, [8, 1024] (2014 §6.1: 128)
   int operator_slices{128};      ///< grid operator slices, [8, 1024] (2014 §6.1: 128)
   /// Caps a `bulge` joint's controller by the same controller of the joint's own bend angle β (the
