@@ -254,7 +254,8 @@ void evaluate_rig(Run& run, const std::string& spec, std::size_t index, std::siz
     note(run, "  " + label + ": " + std::to_string(rig.rest.rows()) + " vertices, " +
                   std::to_string(rig.joints.size()) + " joints, " + std::to_string(rig.clips.size()) +
                   " clips; fitting");
-    skinner = std::make_unique<Skinner>(std::move(rig), run.args.setup.empty() ? SkinSetup{} : load_setup(run.args.setup),
+    skinner = std::make_unique<Skinner>(std::move(rig),
+                                        run.args.setup.empty() ? SkinSetup{} : load_setup(run.args.setup),
                                         fit_progress(run, label));
   } catch (const std::exception& e) {
     run.rows.push_back(isokit::eval::error_row(label, "—", "—", e.what()));

@@ -87,17 +87,6 @@ Rigid3d bone_frame(const Vec3d& a, const Vec3d& b) {
   return frame_from(a, ez, pick);
 }
 
-Rigid3d bone_frame(const Vec3d& a, const Vec3d& b, const std::vector<Vec3d>& vertices) {
-  const Vec3d ez = (b - a) / norm(b - a);
-  double far = 0;
-  for (const Vec3d& p : vertices) far = std::max(far, norm((p - a) - ez * dot(p - a, ez)));
-  for (const Vec3d& p : vertices) {
-    const Vec3d radial = (p - a) - ez * dot(p - a, ez);
-    if (far > 0 && norm(radial) >= (1 - 1e-4) * far) return frame_from(a, ez, radial);
-  }
-  return bone_frame(a, b);
-}
-
 namespace {
 
 /// A part's sub-mesh in its bone frame, with what the sampling needs.
@@ -315,7 +304,7 @@ FittedPart fit_part_closed(const MeshPart& part, const PartFitOptions& o) {
   const std::string& name = part.name;
   const double len = checked_bone_length(part);
   FittedPart out;
-  out.local_to_world = bone_frame(part.bone_start, part.bone_end, part.vertices);
+  out.local_to_world = bone_frame(part.bone_start, part.bone_end);
   const LocalMesh mesh = local_mesh(part, out.local_to_world, len);
   const std::size_t ncand = std::size_t(o.target_samples) * std::size_t(o.candidates_per_sample);
   const std::vector<HrbfSample> cand = candidates(part, mesh, o, ncand);

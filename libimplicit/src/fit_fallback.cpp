@@ -20,7 +20,7 @@ namespace {
 /// vertices to the segment, sampled into a grid.
 FittedPart capsule_on(const MeshPart& part, const Vec3d& a, const Vec3d& b, int resolution) {
   FittedPart out;
-  out.local_to_world = bone_frame(a, b, part.vertices);
+  out.local_to_world = bone_frame(a, b);
   const double len = norm(b - a);
   std::vector<double> dist;
   for (const Vec3d& v : part.vertices) {

@@ -85,7 +85,7 @@ struct PartFitOptions {
 };
 
 /// The fitted primitive. `local` is in the bone frame: origin `bone_start`, +z along the bone
-/// (x, y from the part's vertices, `bone_frame`); `local_to_world` places it at rest.
+/// (x, y completed deterministically, `bone_frame`); `local_to_world` places it at rest.
 struct FittedPart {
   std::shared_ptr<const HrbfField> local;
   std::shared_ptr<const GridField> grid;  ///< null unless `sample_grid`
@@ -101,14 +101,9 @@ struct FittedPart {
   FieldPtr field() const;
 };
 
-/// Bone frame: origin at `a`, z along `b − a`, x along the world axis least aligned with the bone.
+/// Bone frame used by `fit_part`: origin at `a`, z along `b − a`, x along the world axis least
+/// aligned with the bone (made orthogonal).
 Rigid3d bone_frame(const Vec3d& a, const Vec3d& b);
-/// Bone frame used by `fit_part`: origin at `a`, z along `b − a`, x towards the first of
-/// `vertices` (in their order) whose distance to the bone's line is within 1e-4 of the largest,
-/// so that the frame turns with the part: a rotated copy of a rig gets the rotated frames, and
-/// the same sampled grids (not in the papers; docs/skinning.md, "The fit frame turns with the part"). Without such
-/// a vertex (all on the line), the world-axis rule above.
-Rigid3d bone_frame(const Vec3d& a, const Vec3d& b, const std::vector<Vec3d>& vertices);
 
 /// Fits one part. \throw InputError naming `part.name`: zero-length bone, empty part, indices
 /// out of range, non-finite vertices, fewer than 4 usable samples, inward-oriented triangles (the
