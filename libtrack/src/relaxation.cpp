@@ -15,11 +15,12 @@ namespace {
 // The relaxation starts on the vertices whose first tangential step is longer than the
 // tolerance, or that are still settling after the Newton steps: a vertex with a shorter step
 // would move by less than the tolerance and is left until a neighbour moves (no field
-// evaluation needed to find them). Without Newton steps nothing was evaluated: every vertex.
+// evaluation needed to find them). Without Newton steps nothing was evaluated: every vertex;
+// without the active set (TrackerOptions::active_set), every vertex too.
 void select_start(TrackState& s) {
   const TrackerOptions& o = s.m.options;
   if (o.max_iterations <= 0) return;
-  if (o.initial_newton_steps == 0) {
+  if (o.initial_newton_steps == 0 || !o.active_set) {
     s.active = s.set.all();
     return;
   }

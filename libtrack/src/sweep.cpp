@@ -91,6 +91,8 @@ float sweep(TrackState& s, bool relax, bool evaluate_all) {
   const float mx = commit(s, dense);
   s.first = false;
   s.set.update(s.active, s.moved);
+  // Without the active set (2014): every vertex in the next sweep while any moved.
+  if (!s.m.options.active_set && !s.active.empty()) s.active = s.set.all();
   return std::sqrt(mx);
 }
 

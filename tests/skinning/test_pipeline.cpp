@@ -308,6 +308,61 @@ TEST_CASE("pipeline: bad input to the skinner is rejected naming the item", "[sk
                     Catch::Contains("s.json.fit.max_error") && Catch::Contains("[0, 100]"));
 }
 
+TEST_CASE("setup: the paper preset turns every isokit addition off; later keys override it",
+          "[skinning][setup]") {
+  const SkinSetup d;
+  // Every addition is on by default (else the preset would test nothing).
+  CHECK(d.tracker.chebyshev_rho > 0.f);
+  CHECK(d.tracker.active_set);
+  CHECK(d.tracker.lazy_evaluation);
+  CHECK(d.tracker.min_contact_damping < 1.f);
+  CHECK(d.tracker.fold_contacts);
+  CHECK(d.tracker.fold_repair.rounds > 0);
+  CHECK(d.tracker.orientation_repair.rounds > 0);
+  CHECK(d.axis_guard);
+  CHECK(d.bulge_gate);
+  CHECK(d.substeps.fold_rule);
+  const SkinSetup p = setup_from_json(R"({"preset": "paper"})", "s.json");
+  CHECK(p.tracker.chebyshev_rho == 0.f);
+  CHECK(!p.tracker.active_set);
+  CHECK(!p.tracker.lazy_evaluation);
+  CHECK(p.tracker.min_contact_damping == 1.f);
+  CHECK(!p.tracker.fold_contacts);
+  CHECK(p.tracker.fold_repair.rounds == 0);
+  CHECK(p.tracker.orientation_repair.rounds == 0);
+  CHECK(p.tracker.smoothing.beta_diffusion_steps == 2);
+  CHECK(p.tracker.smoothing.smoothing_steps == 3);
+  CHECK(!p.axis_guard);
+  CHECK(!p.bulge_gate);
+  CHECK(p.substeps.paper_rule);
+  CHECK(!p.substeps.fold_rule);
+  CHECK(p.fit.closure == isokit::implicit::PartFitOptions::Closure::joints);
+  CHECK(p.max_fit_error == 0.0);
+  CHECK(p.capsule_match == 0.0);
+  // The papers' own values stay as they are.
+  CHECK(p.tracker.sigma == d.tracker.sigma);
+  CHECK(p.tracker.contact_angle_deg == d.tracker.contact_angle_deg);
+  CHECK(p.operator_resolution == d.operator_resolution);
+  // One addition back on top of the preset (an ablation row), and the new tracker keys.
+  const SkinSetup one = setup_from_json(
+      R"({"preset": "paper", "tracker": {"fold_repair_rounds": 8, "chebyshev_rho": 0.9, "active_set": true,
+          "min_contact_damping": 0.5, "fold_contacts": true}})",
+      "s.json");
+  CHECK(one.tracker.fold_repair.rounds == 8);
+  CHECK(one.tracker.chebyshev_rho == 0.9f);
+  CHECK(one.tracker.active_set);
+  CHECK(one.tracker.min_contact_damping == 0.5f);
+  CHECK(one.tracker.fold_contacts);
+  CHECK(!one.axis_guard);
+  CHECK(setup_from_json(R"({"preset": "isokit"})", "s.json").tracker.active_set);
+  CHECK_THROWS_WITH(setup_from_json(R"({"preset": "2014"})", "s.json"),
+                    Catch::Contains("s.json.preset") && Catch::Contains("\"paper\""));
+  CHECK_THROWS_WITH(setup_from_json(R"({"tracker": {"chebyshev_rho": 1}})", "s.json"),
+                    Catch::Contains("s.json.tracker.chebyshev_rho"));
+  CHECK_THROWS_WITH(setup_from_json(R"({"tracker": {"min_contact_damping": 0}})", "s.json"),
+                    Catch::Contains("s.json.tracker.min_contact_damping"));
+}
+
 TEST_CASE("pipeline: tracker calls per frame and the calls stopped at the iteration cap",
           "[skinning][pipeline]") {
   SkinSetup setup = fast_setup();

@@ -196,11 +196,29 @@ void read_tracker_repairs(const json& t, const std::string& w, SkinSetup& s) {
 /// Section `tracker`: the 2014 tracker (track::TrackerOptions) and the axis guard.
 void read_tracker(const json& t, const std::string& w, SkinSetup& s) {
   check_keys(t,
-             {"max_iterations", "tolerance", "sigma", "contact_angle_deg", "initial_newton_steps",
-              "smoothing_steps", "beta_diffusion_steps", "angle_contacts", "relaxation", "lazy_evaluation",
-              "fold_repair_rounds", "fold_repair_steps", "fold_repair_rings", "fold_repair_max_fraction",
-              "fold_repair_min_part_vertices", "orientation_repair_rounds", "orientation_repair_max_move",
-              "orientation_repair_max_outward_move", "axis_guard"},
+             {"max_iterations",
+              "tolerance",
+              "sigma",
+              "contact_angle_deg",
+              "initial_newton_steps",
+              "smoothing_steps",
+              "beta_diffusion_steps",
+              "angle_contacts",
+              "relaxation",
+              "lazy_evaluation",
+              "fold_repair_rounds",
+              "fold_repair_steps",
+              "fold_repair_rings",
+              "fold_repair_max_fraction",
+              "fold_repair_min_part_vertices",
+              "orientation_repair_rounds",
+              "orientation_repair_max_move",
+              "orientation_repair_max_outward_move",
+              "axis_guard",
+              "chebyshev_rho",
+              "active_set",
+              "min_contact_damping",
+              "fold_contacts"},
              w);
   std::string relaxation = "jacobi";
   read(t, "relaxation", relaxation, w);
@@ -219,6 +237,16 @@ void read_tracker(const json& t, const std::string& w, SkinSetup& s) {
   read(t, "angle_contacts", s.tracker.angle_contacts, w);
   read(t, "lazy_evaluation", s.tracker.lazy_evaluation, w);
   read(t, "axis_guard", s.axis_guard, w);
+  read(t, "chebyshev_rho", s.tracker.chebyshev_rho, w);
+  require(std::isfinite(s.tracker.chebyshev_rho) && s.tracker.chebyshev_rho >= 0.f &&
+              s.tracker.chebyshev_rho < 1.f,
+          w + ".chebyshev_rho", "must be in [0, 1)", "use 0.995 (the default) or 0 (plain Jacobi, 2014)");
+  read(t, "active_set", s.tracker.active_set, w);
+  read(t, "min_contact_damping", s.tracker.min_contact_damping, w);
+  require(std::isfinite(s.tracker.min_contact_damping) && s.tracker.min_contact_damping > 0.f &&
+              s.tracker.min_contact_damping <= 1.f,
+          w + ".min_contact_damping", "must be in (0, 1]", "use 0.25 (the default) or 1 (no damping)");
+  read(t, "fold_contacts", s.tracker.fold_contacts, w);
   read_tracker_repairs(t, w, s);
 }
 
@@ -253,6 +281,25 @@ void read_substeps(const json& p, const std::string& w, SubstepOptions& substeps
 
 }  // namespace
 
+void apply_paper_preset(SkinSetup& s) {
+  s.fit.closure = implicit::PartFitOptions::Closure::joints;
+  s.max_fit_error = 0;
+  s.capsule_match = 0;
+  track::TrackerOptions& t = s.tracker;
+  t.chebyshev_rho = 0.f;
+  t.active_set = false;
+  t.lazy_evaluation = false;
+  t.min_contact_damping = 1.f;
+  t.fold_contacts = false;
+  t.fold_repair.rounds = 0;
+  t.orientation_repair.rounds = 0;
+  t.smoothing = {2, 3};
+  s.axis_guard = false;
+  s.bulge_gate = false;
+  s.substeps.paper_rule = true;
+  s.substeps.fold_rule = false;
+}
+
 SkinSetup setup_from_json(const std::string& text, const std::string& source) {
   json j;
   try {
@@ -263,9 +310,16 @@ SkinSetup setup_from_json(const std::string& text, const std::string& source) {
   SkinSetup s;
   s.source = source;
   check_keys(j,
-             {"version", "tree", "default_operator", "joints", "fit", "operators", "tracker", "projector",
-              "substeps"},
+             {"version", "preset", "tree", "default_operator", "joints", "fit", "operators", "tracker",
+              "projector", "substeps"},
              source);
+  if (j.contains("preset")) {
+    const json& p = j.at("preset");
+    require(p.is_string() && (p == "paper" || p == "isokit"), source + ".preset",
+            "must be \"paper\" or \"isokit\" (got " + p.dump() + ")",
+            "use \"paper\" (the papers' algorithms alone) or \"isokit\" (the defaults)");
+    if (p == "paper") apply_paper_preset(s);
+  }
   int version = 1;
   read(j, "version", version, source);
   require(version == 1, source + ".version", "unsupported (got " + std::to_string(version) + ")",

@@ -129,6 +129,11 @@ struct TrackerOptions {
   /// evaluation per active vertex and iteration, as in 2014; not in the papers;
   /// docs/tracking.md, step 2 "Lazy field evaluation").
   bool lazy_evaluation{true};
+  /// Active set: each relaxation iteration updates only the vertices that moved by more than the
+  /// tolerance in the previous one and their one-ring neighbours (default true; false = every
+  /// vertex in every iteration while any moved, as in 2014; not in the papers; docs/tracking.md,
+  /// step 2 "Active set"). Both stop on the same test (no vertex moved by more than the tolerance).
+  bool active_set{true};
   /// Work on the vertices in a spatial (Morton) order internally; inputs and outputs stay in the
   /// caller's order, and results equal the unordered run up to rounding (neighbour sums in
   /// another order). Default true; not in the papers; docs/tracking.md, step 2 "Internal vertex

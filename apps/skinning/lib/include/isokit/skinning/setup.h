@@ -125,6 +125,20 @@ struct SkinSetup {
 const char* to_string(JointOperator op);
 JointOperator joint_operator_from_string(const std::string& s, const std::string& where);
 
+/// The `paper` preset (setup key `"preset": "paper"`, applied before the other keys, which may
+/// override it): the 2013 fit and the 2014 tracker alone, every isokit addition off —
+/// `fit.closure` joints, `fit.max_error` 0, `fit.capsule_match` 0; tracker: `chebyshev_rho` 0
+/// (plain Jacobi), `active_set` false, `lazy_evaluation` false, `min_contact_damping` 1 (no
+/// contact damping), `fold_contacts` false, fold repair and orientation repair 0 rounds, contact
+/// smoothing 2 β-diffusion and 3 smoothing steps (2013 §5), `axis_guard` false; operators:
+/// `bulge_gate` false; sub-steps: the 2014 rule without `fold_rule`. Kept as they are, because
+/// the papers give no value or the code has no paper-only path: the iteration cap (100) and
+/// tolerance, the 10 initial Newton steps, the Newton step clamp (`max_step`), the cotangent
+/// clamp, the vertex order (no result change) and the failed-fit rules (a part whose HRBF does
+/// not solve shares a neighbour's primitive, else a capsule). docs/skinning.md, "The paper
+/// preset".
+void apply_paper_preset(SkinSetup& setup);
+
 /// Parses a setup (validated). \throw InputError naming `source`, the key and the fix.
 SkinSetup setup_from_json(const std::string& text, const std::string& source);
 /// \throw InputError naming the file when it cannot be read or is invalid.
