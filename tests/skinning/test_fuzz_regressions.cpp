@@ -9,6 +9,7 @@
 #include "isokit/core/error.h"
 #include "isokit/skinning/animation.h"
 #include "isokit/skinning/procedural.h"
+#include "isokit/skinning/rig_io.h"
 #include "isokit/skinning/setup.h"
 
 using namespace isokit;
@@ -47,4 +48,11 @@ TEST_CASE("fuzz: a JSON number too large for a double is an InputError", "[skinn
   CHECK_THROWS_WITH(setup_from_json(text, "s.json"), Catch::Contains("not valid JSON"));
   const Rig rig = make_cylinder();
   CHECK_THROWS_AS(pose_script_from_json(rig, text, "p.json"), InputError);
+}
+
+TEST_CASE("fuzz: glTF indices with float components are refused", "[skinning][io][fuzz]") {
+  // A FLOAT indices accessor holding 1e35 was converted to unsigned with undefined behaviour
+  // (UBSan: float-cast-overflow in gltf_scene.cpp); glTF allows unsigned integer indices only.
+  const std::string path = std::string(ISOKIT_TEST_SOURCE_DIR) + "/data/fuzz/gltf-float-indices.gltf";
+  CHECK_THROWS_WITH(load_rig(path), Catch::Contains("indices") && Catch::Contains("componentType 5126"));
 }
