@@ -23,14 +23,22 @@ for t in "${targets[@]}"; do
   exe="$build/fuzz/isokit_fuzz_$t"
   corpus="$build/corpus/$t" findings="$build/findings/$t"
   mkdir -p "$corpus" "$findings"
+  # assimp 5.2 leaks, hangs and over-allocates inside itself on malformed FBX / COLLADA files
+  # (docs/fuzzing.md): those targets run without leak detection, in fork mode, and go on after a
+  # finding (each is kept), so that they fuzz for the whole time.
+  extra=(-detect_leaks=1)
+  case "$t" in
+    fbx | dae) extra=(-detect_leaks=0 -fork=1 -ignore_crashes=1 -ignore_timeouts=1 -ignore_ooms=1) ;;
+  esac
   start=$(date +%s)
   "$exe" -max_total_time="$seconds" -timeout="$timeout_s" -rss_limit_mb="$rss_mb" \
-    -malloc_limit_mb="$rss_mb" -print_final_stats=1 -artifact_prefix="$findings/" \
+    -malloc_limit_mb="$rss_mb" "${extra[@]}" -print_final_stats=1 -artifact_prefix="$findings/" \
     "$corpus" "$build/seeds/$t" > "$build/findings/$t.log" 2>&1
   rc=$?
   elapsed=$(( $(date +%s) - start ))
-  execs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$build/findings/$t.log" | grep -o '[0-9]*$')
+  execs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$build/findings/$t.log" | tail -1 | grep -o '[0-9]*$')
   last=$(grep -E '^#[0-9]+' "$build/findings/$t.log" | tail -1)
+  [ -n "$execs" ] || execs=$(grep -oE '^#[0-9]+' <<< "$last" | tr -d '#')
   cov=$(grep -o 'cov: [0-9]*' <<< "$last" | grep -o '[0-9]*')
   ft=$(grep -o 'ft: [0-9]*' <<< "$last" | grep -o '[0-9]*')
   corp=$(grep -o 'corp: [0-9]*' <<< "$last" | grep -o '[0-9]*')
