@@ -56,7 +56,7 @@ namespace {
 using nlohmann::json;
 
 /// A JSON number as the arithmetic type T, checked: nlohmann's `get<T>` converts a number out
-/// of T's range (1e300 into an int) with undefined behaviour (found by fuzzing, docs/fuzzing.md).
+/// of T's range (1e300 into an int) with undefined behaviour (found while fuzzing, docs/fuzzing.md).
 /// Integer keys take JSON integers only.
 template <class T>
 T checked_number(const json& v, const std::string& where) {
