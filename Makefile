@@ -2,13 +2,16 @@
 # packages, configures and builds (Release, all cores), then runs.
 BUILD      ?= build
 ASAN_BUILD ?= build-asan
+FUZZ_BUILD ?= build-fuzz
+FUZZ_SECONDS ?= 300
+FUZZ_TARGETS ?= glb gltf fbx dae setup spec npy
 DEMO_OUT   ?= out/demo
 EVAL_OUT   ?= out/eval
 EVAL_ARGS  ?=
 JOBS       ?= $(shell nproc)
 CMAKE_ARGS ?=
 
-.PHONY: all deps configure build demo eval test test-release test-asan bench clean
+.PHONY: all deps configure build demo eval test test-release test-asan bench fuzz clean
 
 all: build
 
@@ -67,5 +70,16 @@ bench: build
 	$(BUILD)/bench/isokit-bench-report $(BUILD)/bench-results/skinning.json \
 	  --baseline BM_SkinFrame/1/13000/50/iterations:1/manual_time
 
+# libFuzzer targets (clang, ASan + UBSan; docs/fuzzing.md): builds them in $(FUZZ_BUILD), writes
+# the seed corpora with the project's own writers, runs each target for $(FUZZ_SECONDS) s, one at a
+# time; crashes, hangs and out-of-memory inputs go to $(FUZZ_BUILD)/findings/<target>/.
+fuzz: deps
+	@command -v clang++ >/dev/null || { echo "make fuzz needs clang (libFuzzer): apt-get install clang"; exit 1; }
+	CC=clang CXX=clang++ cmake -S . -B $(FUZZ_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DISOKIT_FUZZ=ON \
+	  -DISOKIT_APPS=ON -DISOKIT_CUDA=OFF -DISOKIT_BENCH=OFF -DISOKIT_TESTS=OFF -DISOKIT_WERROR=OFF $(CMAKE_ARGS)
+	cmake --build $(FUZZ_BUILD) -j $(JOBS) --target isokit_fuzz_all
+	rm -rf $(FUZZ_BUILD)/seeds && $(FUZZ_BUILD)/fuzz/isokit_fuzz_seeds $(FUZZ_BUILD)/seeds
+	scripts/run-fuzz.sh $(FUZZ_BUILD) $(FUZZ_SECONDS) $(FUZZ_TARGETS)
+
 clean:
-	rm -rf $(BUILD) $(ASAN_BUILD) out demo-out
+	rm -rf $(BUILD) $(ASAN_BUILD) $(FUZZ_BUILD) out demo-out

@@ -2,8 +2,10 @@
 #include "isokit/operators/spec.h"
 
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <fstream>
+#include <limits>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
@@ -225,7 +227,13 @@ double number(const json& j, const std::string& where) {
 
 int integer(const json& j, const std::string& where) {
   require(j.is_number_integer(), where, "must be an integer", "see docs/operators.md for the schema");
-  return j.get<int>();
+  // get<int> would wrap a larger integer silently (4294967424 -> 128).
+  const bool fits = j.is_number_unsigned() ? j.get<std::uint64_t>() <=
+                                                 static_cast<std::uint64_t>(std::numeric_limits<int>::max())
+                                           : j.get<std::int64_t>() >= std::numeric_limits<int>::min() &&
+                                                 j.get<std::int64_t>() <= std::numeric_limits<int>::max();
+  require(fits, where, "out of range (got " + j.dump() + ")", "see docs/operators.md for the schema");
+  return static_cast<int>(j.get<std::int64_t>());
 }
 
 Point2 point(const json& j, const std::string& where) {
@@ -239,7 +247,7 @@ OperatorSpec spec_from_json(const std::string& text, const std::string& source) 
   json j;
   try {
     j = json::parse(text);
-  } catch (const json::parse_error& e) {
+  } catch (const json::exception& e) {  // parse_error, and out_of_range for a number like 1e999
     throw InputError(source + ": not valid JSON (" + e.what() + "); fix the syntax");
   }
   const std::string r = source + ": ";

@@ -171,7 +171,7 @@ std::vector<Pose> pose_script_from_json(const Rig& rig, const std::string& text,
   json j;
   try {
     j = json::parse(text);
-  } catch (const json::parse_error& e) {
+  } catch (const json::exception& e) {  // parse_error, and out_of_range for a number like 1e999
     throw InputError(source + ": not valid JSON (" + e.what() + "); fix the file");
   }
   require(j.is_object() && j.contains("keys") && j["keys"].is_array() && !j["keys"].empty(), source,

@@ -9,6 +9,7 @@
 // inverse bind matrices gets identities, key times are in seconds (1 tick per second).
 #include <algorithm>
 #include <array>
+#include <cstdint>
 #include <map>
 #include <memory>
 #include <set>
@@ -101,6 +102,22 @@ std::vector<float> floats(const tinygltf::Model& m, int accessor, int want, cons
   return std::vector<float>(v.begin(), v.end());
 }
 
+/// The values of an index accessor (a primitive's indices, JOINTS_n): glTF 2.0 allows unsigned
+/// byte, short or int components only. A float accessor here used to be converted to unsigned
+/// with undefined behaviour (1e35; found by fuzzing, docs/fuzzing.md).
+std::vector<std::uint32_t> index_values(const tinygltf::Model& m, int accessor, int* comps,
+                                        const std::string& what) {
+  const std::vector<double> v = read_accessor(m, accessor, comps, what);
+  const int type = m.accessors[static_cast<std::size_t>(accessor)].componentType;  // index checked
+  require(type == kUnsignedByte || type == kUnsignedShort || type == kUnsignedInt,
+          what + " (accessor " + std::to_string(accessor) + ")",
+          "must have unsigned byte, short or int components (componentType " + std::to_string(type) + ")",
+          "fix the file or export it again");
+  std::vector<std::uint32_t> out(v.size());
+  std::transform(v.begin(), v.end(), out.begin(), [](double x) { return static_cast<std::uint32_t>(x); });
+  return out;
+}
+
 std::unique_ptr<aiMesh> SceneBuilder::primitive_mesh(const tinygltf::Mesh& mesh, std::size_t mesh_index,
                                                      std::size_t p) {
   const tinygltf::Primitive& prim = mesh.primitives[p];
@@ -124,8 +141,7 @@ std::unique_ptr<aiMesh> SceneBuilder::primitive_mesh(const tinygltf::Mesh& mesh,
   std::vector<unsigned> idx;
   if (prim.indices >= 0) {
     int comps = 0;
-    for (double x : read_accessor(m_, prim.indices, &comps, what + " indices"))
-      idx.push_back(static_cast<unsigned>(x));
+    for (std::uint32_t x : index_values(m_, prim.indices, &comps, what + " indices")) idx.push_back(x);
   } else {
     for (unsigned v = 0; v < nv; ++v) idx.push_back(v);
   }
@@ -160,10 +176,10 @@ void SceneBuilder::add_bones(aiMesh* mesh, const tinygltf::Primitive& prim, cons
     if (jt == prim.attributes.end() || wt == prim.attributes.end()) break;
     int jc = 0;
     int wc = 0;
-    const std::vector<double> jv = read_accessor(m_, jt->second, &jc, path_ + ": JOINTS");
+    const std::vector<std::uint32_t> jv = index_values(m_, jt->second, &jc, path_ + ": JOINTS");
     const std::vector<double> wv = read_accessor(m_, wt->second, &wc, path_ + ": WEIGHTS");
     for (std::size_t i = 0; i < wv.size() && i < jv.size(); ++i) {
-      const auto j = static_cast<std::size_t>(jv[i]);
+      const std::size_t j = jv[i];
       if (wv[i] > 0 && j < nj)
         weights[j].emplace_back(static_cast<unsigned>(i / 4), static_cast<ai_real>(wv[i]));
     }

@@ -3,9 +3,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <fstream>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <type_traits>
 
 #include "isokit/core/error.h"
 #include "isokit/operators/controller.h"
@@ -52,14 +55,46 @@ namespace {
 
 using nlohmann::json;
 
+/// A JSON number as the arithmetic type T, checked: nlohmann's `get<T>` converts a number out
+/// of T's range (1e300 into an int) with undefined behaviour (found while fuzzing, docs/fuzzing.md).
+/// Integer keys take JSON integers only.
+template <class T>
+T checked_number(const json& v, const std::string& where) {
+  using Lim = std::numeric_limits<T>;
+  const std::string fix = "see the setup format in docs/skinning.md";
+  if constexpr (std::is_integral_v<T>) {
+    require(v.is_number_integer(), where, "must be an integer (got " + v.dump() + ")", fix);
+    bool fits = false;
+    if (v.is_number_unsigned())
+      fits = v.get<std::uint64_t>() <= static_cast<std::uint64_t>(Lim::max());
+    else if constexpr (std::is_signed_v<T>)
+      fits = v.get<std::int64_t>() >= Lim::min() && v.get<std::int64_t>() <= Lim::max();
+    else
+      fits = v.get<std::int64_t>() >= 0 && static_cast<std::uint64_t>(v.get<std::int64_t>()) <= Lim::max();
+    require(fits, where, "out of range (got " + v.dump() + ")", fix);
+    return v.is_number_unsigned() ? static_cast<T>(v.get<std::uint64_t>())
+                                  : static_cast<T>(v.get<std::int64_t>());
+  } else {
+    require(v.is_number(), where, "must be a number (got " + v.dump() + ")", fix);
+    const double d = v.get<double>();
+    require(std::isfinite(d) && std::abs(d) <= static_cast<double>(Lim::max()), where,
+            "out of range (got " + v.dump() + ")", fix);
+    return static_cast<T>(d);
+  }
+}
+
 template <class T>
 void read(const json& obj, const char* key, T& out, const std::string& where) {
   if (!obj.contains(key)) return;
-  try {
-    out = obj.at(key).get<T>();
-  } catch (const json::exception&) {
-    throw InputError(where + "." + key + ": wrong type (" + obj.at(key).dump() +
-                     "); see the setup format in docs/skinning.md");
+  if constexpr (std::is_arithmetic_v<T> && !std::is_same_v<T, bool>) {
+    out = checked_number<T>(obj.at(key), where + "." + key);
+  } else {
+    try {
+      out = obj.at(key).get<T>();
+    } catch (const json::exception&) {
+      throw InputError(where + "." + key + ": wrong type (" + obj.at(key).dump() +
+                       "); see the setup format in docs/skinning.md");
+    }
   }
 }
 
@@ -304,7 +339,7 @@ SkinSetup setup_from_json(const std::string& text, const std::string& source) {
   json j;
   try {
     j = json::parse(text);
-  } catch (const json::parse_error& e) {
+  } catch (const json::exception& e) {  // parse_error, and out_of_range for a number like 1e999
     throw InputError(source + ": not valid JSON (" + e.what() + "); fix the file");
   }
   SkinSetup s;

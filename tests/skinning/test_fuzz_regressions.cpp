@@ -1,0 +1,58 @@
+// SPDX-License-Identifier: MIT
+// Inputs found while fuzzing the skinning readers (docs/fuzzing.md), stored in tests/data/fuzz/.
+#include <catch2/catch.hpp>
+
+#include <fstream>
+#include <iterator>
+#include <string>
+
+#include "isokit/core/error.h"
+#include "isokit/skinning/animation.h"
+#include "isokit/skinning/procedural.h"
+#include "isokit/skinning/rig_io.h"
+#include "isokit/skinning/setup.h"
+
+using namespace isokit;
+using namespace isokit::skinning;
+
+namespace {
+std::string fuzz_input(const std::string& name) {
+  std::ifstream in(std::string(ISOKIT_TEST_SOURCE_DIR) + "/data/fuzz/" + name, std::ios::binary);
+  REQUIRE(in.is_open());
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+}  // namespace
+
+TEST_CASE("fuzz: setup numbers out of their type's range are refused", "[skinning][setup][fuzz]") {
+  // {"fit":{"seed":1e300}}: nlohmann's get<uint64_t> converted it with undefined behaviour
+  // (UBSan: float-cast-overflow) and the setup loaded with a garbage seed.
+  const std::string text = fuzz_input("setup-float-into-integer.json");
+  CHECK_THROWS_WITH(setup_from_json(text, "s.json"),
+                    Catch::Contains("s.json.fit.seed") && Catch::Contains("must be an integer"));
+  CHECK_THROWS_AS(setup_from_json(R"({"fit": {"samples": 1e300}})", "s.json"), InputError);
+  CHECK_THROWS_AS(setup_from_json(R"({"fit": {"samples": 3000000000}})", "s.json"), InputError);
+  CHECK_THROWS_AS(setup_from_json(R"({"fit": {"seed": -1}})", "s.json"), InputError);
+  CHECK_THROWS_AS(setup_from_json(R"({"joints": {"a": {"relaxation": 1e300}}})", "s.json"), InputError);
+  CHECK_THROWS_AS(setup_from_json(R"({"version": 1.5})", "s.json"), InputError);
+  // In-range values still read.
+  const SkinSetup s = setup_from_json(R"({"fit": {"seed": 18446744073709551615, "samples": 40}})", "s.json");
+  CHECK(s.fit.seed == 18446744073709551615ull);
+  CHECK(s.fit.target_samples == 40);
+}
+
+TEST_CASE("fuzz: a JSON number too large for a double is an InputError", "[skinning][setup][fuzz]") {
+  // {"version": 1e999}: nlohmann::json::parse threw out_of_range (not parse_error), which escaped
+  // setup_from_json (and the pose-script reader) as a non-InputError exception.
+  const std::string text = fuzz_input("setup-number-overflow.json");
+  CHECK_THROWS_AS(setup_from_json(text, "s.json"), InputError);
+  CHECK_THROWS_WITH(setup_from_json(text, "s.json"), Catch::Contains("not valid JSON"));
+  const Rig rig = make_cylinder();
+  CHECK_THROWS_AS(pose_script_from_json(rig, text, "p.json"), InputError);
+}
+
+TEST_CASE("fuzz: glTF indices with float components are refused", "[skinning][io][fuzz]") {
+  // A FLOAT indices accessor holding 1e35 was converted to unsigned with undefined behaviour
+  // (UBSan: float-cast-overflow in gltf_scene.cpp); glTF allows unsigned integer indices only.
+  const std::string path = std::string(ISOKIT_TEST_SOURCE_DIR) + "/data/fuzz/gltf-float-indices.gltf";
+  CHECK_THROWS_WITH(load_rig(path), Catch::Contains("indices") && Catch::Contains("componentType 5126"));
+}
