@@ -241,7 +241,7 @@ TEST_CASE("pipeline: bad input to the skinner is rejected naming the item", "[sk
   CHECK_FALSE(setup_from_json(R"({"substeps": {"fold_rule": false}})", "s.json").substeps.fold_rule);
   CHECK(s.tracker.fold_repair.rounds == 8);
   CHECK(s.axis_guard);
-  CHECK(s.fold_repair_min_part_vertices == 50);
+  CHECK(s.fold_repair_min_part_vertices == 100);
   CHECK(s.tracker.fold_repair.max_fraction == 0.1);
   CHECK(setup_from_json(
             R"({"tracker": {"fold_repair_min_part_vertices": 0, "fold_repair_max_fraction": 0.5}})", "s.json")

@@ -113,9 +113,10 @@ struct SkinSetup {
   /// tracking2014: the fold repair (TrackerOptions::fold_repair) leaves alone the vertices of
   /// parts with fewer vertices than this, ≥ 0 (0: no limit): a fold repair region holds 20 – 30
   /// vertices, so smaller parts are under-resolved and smoothing would erase them. Not in the
-  /// papers (docs/skinning.md, "Known limits", low-poly rigs). Default 50; setup key
-  /// `tracker.fold_repair_min_part_vertices`.
-  int fold_repair_min_part_vertices{50};
+  /// papers (docs/skinning.md, "Known limits", low-poly rigs; 50 → 100 on 2026-12-02: the
+  /// repairs on CesiumMan's 50 – 90-vertex parts made its walk's edge spikes). Default 100; setup
+  /// key `tracker.fold_repair_min_part_vertices`.
+  int fold_repair_min_part_vertices{100};
 
   /// The operator chosen for `joint` (resolving kAuto with the tree kind).
   JointOperator operator_for(const std::string& joint, TreeKind tree) const;
