@@ -56,3 +56,12 @@ TEST_CASE("fuzz: glTF indices with float components are refused", "[skinning][io
   const std::string path = std::string(ISOKIT_TEST_SOURCE_DIR) + "/data/fuzz/gltf-float-indices.gltf";
   CHECK_THROWS_WITH(load_rig(path), Catch::Contains("indices") && Catch::Contains("componentType 5126"));
 }
+
+TEST_CASE("fuzz: a clip key time far beyond any animation is refused, not sampled", "[skinning][io][fuzz]") {
+  // An animation whose last key lies at 1.4e32 s made the frame count overflow an int (UBSan:
+  // float-cast-overflow in rig_io_load.cpp's sample_clip, found by the 15-minute glb run) and
+  // would have allocated without bound. The loader now refuses a clip of more than 10 M frames.
+  const std::string path = std::string(ISOKIT_TEST_SOURCE_DIR) + "/data/fuzz/glb-clip-key-time-1e32.glb";
+  CHECK_THROWS_WITH(load_rig(path), Catch::Contains("animation") && Catch::Contains("frames at") &&
+                                        Catch::Contains("fix the key times"));
+}

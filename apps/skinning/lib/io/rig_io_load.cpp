@@ -29,6 +29,10 @@ namespace {
 
 namespace fs = std::filesystem;
 
+// Most frames a clip may have when sampled (a day at 30 fps, 2.6 M frames, is beyond any rig's
+// clip; the bound keeps a corrupt key time from overflowing the frame count).
+constexpr int kMaxClipFrames = 10000000;
+
 // Relative tolerance under which two bind matrices of one joint count as equal.
 constexpr double kBindTolerance = 1e-4;
 
@@ -964,6 +968,13 @@ void Loader::build_clips() {
       report_.warnings.push_back("animation " + quote(name) + " moves no joint; skipped");
       continue;
     }
+    // A key time far beyond any animation (found by fuzzing: 1.4e32 s) would overflow the frame
+    // count and allocate without bound.
+    require(std::isfinite(last) && last * options_.fps <= kMaxClipFrames,
+            path_ + ": animation " + quote(name),
+            "lasts " + format_number(last) + " s, more than " + std::to_string(kMaxClipFrames) +
+                " frames at " + format_number(options_.fps) + " fps",
+            "fix the key times in the file (or sample it at a lower --fps)");
     rig_.clips.push_back(sample_clip(name, channel, relevant, rest_trs, last, tps));
   }
 }
