@@ -2,20 +2,13 @@
 // Inputs found while fuzzing the operator readers (docs/fuzzing.md), stored in tests/data/fuzz/.
 #include <catch2/catch.hpp>
 
-#include <fstream>
-#include <iterator>
 #include <string>
 
+#include "fuzz_input.h"
 #include "isokit/core/error.h"
 #include "isokit/operators/spec.h"
 
-namespace {
-std::string fuzz_input(const std::string& name) {
-  std::ifstream in(std::string(ISOKIT_TEST_SOURCE_DIR) + "/data/fuzz/" + name, std::ios::binary);
-  REQUIRE(in.is_open());
-  return std::string(std::istreambuf_iterator<char>(in), {});
-}
-}  // namespace
+using isokit::test::fuzz_input;
 
 TEST_CASE("fuzz: a spec integer beyond int is refused, not wrapped", "[operators][fuzz]") {
   // resolution 4294967312 = 2^32 + 16 used to read as 16.

@@ -2,10 +2,9 @@
 // Inputs found while fuzzing the skinning readers (docs/fuzzing.md), stored in tests/data/fuzz/.
 #include <catch2/catch.hpp>
 
-#include <fstream>
-#include <iterator>
 #include <string>
 
+#include "fuzz_input.h"
 #include "isokit/core/error.h"
 #include "isokit/skinning/animation.h"
 #include "isokit/skinning/procedural.h"
@@ -15,13 +14,7 @@
 using namespace isokit;
 using namespace isokit::skinning;
 
-namespace {
-std::string fuzz_input(const std::string& name) {
-  std::ifstream in(std::string(ISOKIT_TEST_SOURCE_DIR) + "/data/fuzz/" + name, std::ios::binary);
-  REQUIRE(in.is_open());
-  return std::string(std::istreambuf_iterator<char>(in), {});
-}
-}  // namespace
+using isokit::test::fuzz_input;
 
 TEST_CASE("fuzz: setup numbers out of their type's range are refused", "[skinning][setup][fuzz]") {
   // {"fit":{"seed":1e300}}: nlohmann's get<uint64_t> converted it with undefined behaviour

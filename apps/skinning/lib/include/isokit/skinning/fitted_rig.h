@@ -46,10 +46,10 @@ struct BonePart {
   Eigen::Vector3d start{};  ///< bone segment at rest, mesh space: start (fit frame origin)
   Eigen::Vector3d end{};    ///< and end (the fit frame's +z points from start to end)
   bool fitted{false};
-  std::string error;         ///< why the joint has no primitive (no vertices, failed fit)
-  int merged_into{-1};       ///< the joint that took this joint's vertices after a failed fit
+  std::string error;            ///< why the joint has no primitive (no vertices, failed fit)
+  int merged_into{-1};          ///< the joint that took this joint's vertices after a failed fit
   FitRule rule{FitRule::none};  ///< the rule applied (a refitted merge target keeps its own try's)
-  implicit::FittedPart fit;  ///< valid when `fitted`
+  implicit::FittedPart fit;     ///< valid when `fitted`
 };
 
 /// Partition, bone segments and fitted primitives of a rig (the part shared by all methods).

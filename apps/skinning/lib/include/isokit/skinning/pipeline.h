@@ -17,10 +17,10 @@
 #include <vector>
 
 #include "isokit/skinning/animation.h"
-#include "isokit/skinning/skin_field.h"
 #include "isokit/skinning/metrics.h"
 #include "isokit/skinning/rig.h"
 #include "isokit/skinning/setup.h"
+#include "isokit/skinning/skin_field.h"
 
 namespace isokit::skinning {
 
