@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 
 namespace isokit::operators {
@@ -106,6 +107,41 @@ SliceReport inspect_slice(const OperatorSpec& spec, const GridOperator& grid, in
   }
   r.contact_length = contact_length(grid, k);
   return r;
+}
+
+std::string CheckFailure::message() const {
+  char head[64];
+  std::snprintf(head, sizeof head, "slice %d (d = %.3f): ", slice, d);
+  return head + check + " failed: " + detail + "; " + fix;
+}
+
+std::optional<CheckFailure> judge_slice(const SliceReport& r) {
+  auto fail = [&](std::string check, double value, double limit, std::string unit, std::string fix) {
+    char detail[96];
+    std::snprintf(detail, sizeof detail, "%.3g %s (limit %.3g)", value, unit.c_str(), limit);
+    return CheckFailure{r.slice, r.d, std::move(check), detail, std::move(fix)};
+  };
+  if (r.boundary_error > 1e-5)
+    return fail("boundary conditions (2014 eq. 1)", r.boundary_error, 1e-5, "max |g - eq. 1| on the edges",
+                "keep every profile curve off the square's edges (f1, f2 in (0, 1))");
+  if (r.iso_to_profile > r.cell)
+    return fail(
+        "0.5 iso-line against the profile", r.iso_to_profile / r.cell, 1.0,
+        "cells from a 0.5 crossing to the profile",
+        "the operator has a 0.5 iso-line the profile does not ask for: make the boundary curve run from the "
+        "f1 = 0 side to the f2 = 0 side without folding, or raise the resolution");
+  if (r.profile_to_iso > r.cell)
+    return fail("profile against the 0.5 iso-line", r.profile_to_iso / r.cell, 1.0,
+                "cells from the boundary profile to the nearest 0.5 crossing",
+                "the boundary curve is not reproduced: separate curves closer than two cells, or raise the "
+                "resolution");
+  return std::nullopt;
+}
+
+std::optional<CheckFailure> check_operator(const OperatorSpec& spec, const GridOperator& grid) {
+  for (int k = 0; k < grid.nd(); ++k)
+    if (auto f = judge_slice(inspect_slice(spec, grid, k))) return f;
+  return std::nullopt;
 }
 
 }  // namespace isokit::operators

@@ -42,6 +42,33 @@ TEST_CASE("biharmonic presets: boundary conditions, axes, 0.5 iso-line on the pr
   }
 }
 
+TEST_CASE("check_operator: presets pass; a broken edge or a foreign profile fails, naming check and slice",
+          "[operators][checks]") {
+  for (const auto& name : preset_spec_names()) {
+    const OperatorSpec spec = preset_spec(name, 32);
+    const GridOperator g = generate_operator(spec);
+    INFO(name);
+    CHECK_FALSE(check_operator(spec, g).has_value());
+  }
+  const OperatorSpec contact = preset_spec("contact", 32);
+  const GridOperator g = generate_operator(contact);
+  // One boundary node off eq. 1 in the last slice: the boundary check fails there.
+  GridOperator broken = g;
+  const int last = g.nd() - 1, n = g.nf();
+  broken.data()[(static_cast<std::size_t>(last) * n + 5) * n + (n - 1)] += 0.01f;
+  const auto edge = check_operator(contact, broken);
+  REQUIRE(edge.has_value());
+  CHECK(edge->slice == last);
+  CHECK(edge->check.find("boundary") != std::string::npos);
+  CHECK(edge->message().find("slice " + std::to_string(last)) == 0);
+  // The bulge grid against the contact spec: its 0.5 iso-line is not the contact profile's.
+  const auto foreign = check_operator(contact, generate_operator(preset_spec("bulge", 32)));
+  REQUIRE(foreign.has_value());
+  CHECK(foreign->check.find("iso-line") != std::string::npos);
+  CHECK(foreign->d > 0.0);
+  CHECK_FALSE(foreign->fix.empty());
+}
+
 TEST_CASE("biharmonic presets at 64 and with 65 (odd) nodes", "[operators][biharmonic][slow]") {
   for (int res : {64, 65})
     for (const auto& name : preset_spec_names()) {

@@ -77,6 +77,7 @@ int run_inspect(const std::string& path, bool quiet) {
                 "iso->prof", "prof->iso", "contact_err", "contact_len", "nonmono");
   SliceReport worst;
   int worst_mono = 0, bad = 0;
+  std::string first_failure;
   for (int k = 0; k < op.grid.nd(); ++k) {
     const SliceReport r = inspect_slice(op.spec, op.grid, k);
     if (!quiet)
@@ -90,7 +91,10 @@ int run_inspect(const std::string& path, bool quiet) {
     worst.contact_error = std::max(worst.contact_error, r.contact_error);
     worst_mono = std::max(worst_mono, r.monotonicity_violations);
     worst.monotonicity_max_drop = std::max(worst.monotonicity_max_drop, r.monotonicity_max_drop);
-    if (r.boundary_error > 1e-5 || r.iso_to_profile > h || r.profile_to_iso > h) ++bad;
+    if (const auto failure = judge_slice(r)) {
+      if (bad == 0) first_failure = failure->message();
+      ++bad;
+    }
   }
   std::printf(
       "worst: bc_err %.3e, axis_slope %.3e, iso->profile %.3e (%.2f cells), profile->iso %.3e (%.2f cells), "
@@ -98,8 +102,10 @@ int run_inspect(const std::string& path, bool quiet) {
       worst.boundary_error, worst.axis_slope, worst.iso_to_profile, worst.iso_to_profile / h,
       worst.profile_to_iso, worst.profile_to_iso / h, worst.contact_error, worst_mono,
       worst.monotonicity_max_drop);
-  std::printf("%s\n", bad == 0 ? "checks: ok (bc <= 1e-5, 0.5 iso-line within one cell of the profile)"
-                               : ("checks: " + std::to_string(bad) + " slice(s) FAIL").c_str());
+  std::printf("%s\n",
+              bad == 0
+                  ? "checks: ok (bc <= 1e-5, 0.5 iso-line within one cell of the profile)"
+                  : ("checks: " + std::to_string(bad) + " slice(s) FAIL; first: " + first_failure).c_str());
   return bad == 0 ? 0 : 3;
 }
 

@@ -4,6 +4,8 @@
 /// inspect` and the tests).
 #pragma once
 
+#include <optional>
+#include <string>
 #include <vector>
 
 #include "isokit/operators/grid_operator.h"
@@ -27,6 +29,27 @@ struct SliceReport {
 
 /// Checks slice `k` of `grid` against the profile of `spec` at that slice's d.
 SliceReport inspect_slice(const OperatorSpec& spec, const GridOperator& grid, int k);
+
+/// A failed check: which one, by how much, and what the designer can do about it.
+struct CheckFailure {
+  int slice{0};
+  double d{0};
+  std::string check;   ///< e.g. "boundary conditions (2014 eq. 1)"
+  std::string detail;  ///< the measured value against its limit
+  std::string fix;     ///< what to change in the spec
+  /// One line: "slice K (d = D): CHECK failed: DETAIL; FIX".
+  std::string message() const;
+};
+
+/// The pass/fail criteria of a slice report (those of `isokit-opdesigner inspect`):
+/// boundary error ≤ 1e-5 (2014 eq. 1), and the 0.5 iso-line within one grid cell of the
+/// boundary profile both ways (2014 eq. 2: the iso-line *is* the profile). Monotonicity and the
+/// contact error are reported by inspect_slice but not judged (the presets' contact valleys have
+/// small non-monotone runs; docs/operators.md). Returns the first failed check, or nullopt.
+std::optional<CheckFailure> judge_slice(const SliceReport& report);
+
+/// inspect_slice + judge_slice over every slice; the first failure, or nullopt when all pass.
+std::optional<CheckFailure> check_operator(const OperatorSpec& spec, const GridOperator& grid);
 
 /// 0.5 crossings of slice k along grid edges (linear interpolation).
 std::vector<Point2> iso_crossings(const GridOperator& grid, int k, double level);
