@@ -18,6 +18,7 @@ packages=(
   libcli11-dev nlohmann-json3-dev         # command lines, JSON
   libcairo2-dev                           # 2D figures (PNG/SVG/PDF)
   libglfw3-dev libimgui-dev               # interactive GUIs
+  xvfb xauth libgl1-mesa-dri              # headless GUI tests (xvfb-run, Mesa software GL)
   catch2 libbenchmark-dev                 # tests, benchmarks
 )
 

@@ -79,24 +79,23 @@ void plot_slice(const StoredOperator& op, double d, const std::string& out_path)
   fig.save(out_path);
 }
 
-ComposeStats compose(const StoredOperator& op, const ComposeOptions& o, const std::string& out_path) {
+ComposedField compose_field(const operators::GridOperator& op, const operators::ControllerTable& controller,
+                            const ComposeOptions& o) {
   require(std::isfinite(o.angle_deg) && o.angle_deg >= 0 && o.angle_deg <= 180, "--angle",
           "must be in [0, 180] degrees (got " + format_number(o.angle_deg) + ")", "0 = straight joint");
   if (o.d)
     require(std::isfinite(*o.d) && *o.d >= 0 && *o.d <= 1, "--d",
             "must be in [0, 1] (got " + format_number(*o.d) + ")", "omit --d to use the spec's controller");
   require(o.samples >= 16 && o.samples <= 4096, "samples", "must be in [16, 4096]", "use e.g. 361");
-  const operators::ControllerTable controller = op.spec.make_controller().table();
   const double phi = o.angle_deg * kPi / 180.0;
-  const Point2 a{-1.2, 0}, j{0, 0}, b{1.2 * std::cos(phi), 1.2 * std::sin(phi)};
-  plot::ScalarGrid grid;
-  for (auto* g : {&grid}) {
-    g->nx = g->ny = o.samples;
-    g->x0 = g->y0 = -1.6;
-    g->x1 = g->y1 = 1.6;
-    g->values.resize(static_cast<std::size_t>(o.samples) * o.samples);
-  }
-  ComposeStats st;
+  ComposedField out;
+  out.bones = {Point2{-1.2, 0}, Point2{0, 0}, Point2{1.2 * std::cos(phi), 1.2 * std::sin(phi)}};
+  const Point2 a = out.bones[0], j = out.bones[1], b = out.bones[2];
+  plot::ScalarGrid& grid = out.grid;
+  grid.nx = grid.ny = o.samples;
+  grid.x0 = grid.y0 = -1.6;
+  grid.x1 = grid.y1 = 1.6;
+  grid.values.resize(static_cast<std::size_t>(o.samples) * o.samples);
   for (int y = 0; y < o.samples; ++y)
     for (int x = 0; x < o.samples; ++x) {
       const Point2 p{grid.x(x), grid.y(y)};
@@ -110,32 +109,38 @@ ComposeStats compose(const StoredOperator& op, const ComposeOptions& o, const st
             (nu > 0 && nv > 0) ? std::clamp((u.gx * v.gx + u.gy * v.gy) / (nu * nv), -1.0, 1.0) : 1.0;
         d = controller(float(std::acos(c)));
       }
-      st.max_d = std::max(st.max_d, d);
-      const std::size_t i = static_cast<std::size_t>(y) * o.samples + x;
-      grid.values[i] = op.grid.eval(float(u.value), float(v.value), float(d)).g;
+      out.stats.max_d = std::max(out.stats.max_d, d);
+      grid.values[static_cast<std::size_t>(y) * o.samples + x] =
+          op.eval(float(u.value), float(v.value), float(d)).g;
     }
   // The contact surface is a valley where g touches 0.5 with g > 0.5 on both sides: take the
   // iso-line just above 0.5 inside both fields; it runs around the contact line (count it once).
   const float eps = 0.01f;
-  std::vector<plot::Segment2> contact;
   for (const auto& s : plot::iso_segments(grid, 0.5f + eps)) {
     const Point2 m{0.5 * (s[0][0] + s[1][0]), 0.5 * (s[0][1] + s[1][1])};
     // Inside both operands by a margin, evaluated exactly at the segment (not at a sample): the
     // clean union's own 0.5 + eps line where f1 = f2 (around a joint) stays below this margin.
     if (capsule(m, a, j, o.radius).value > 0.5 + 2 * eps && capsule(m, j, b, o.radius).value > 0.5 + 2 * eps)
-      contact.push_back(s);
+      out.contact.push_back(s);
   }
-  st.contact_length = 0.5 * plot::total_length(contact);
+  out.stats.contact_length = 0.5 * plot::total_length(out.contact);
+  return out;
+}
+
+ComposeStats compose(const StoredOperator& op, const ComposeOptions& o, const std::string& out_path) {
+  const ComposedField field = compose_field(op.grid, op.spec.make_controller().table(), o);
+  const ComposeStats& st = field.stats;
+  const Point2 a = field.bones[0], j = field.bones[1], b = field.bones[2];
   if (out_path.empty()) return st;
   plot::FigureOptions fo;
   fo.pixel_size = o.pixels;
   fo.title = "'" + op.spec.name + "', bend " + fmt(o.angle_deg, 0) + " deg, " +
              (o.d ? "d = " + fmt(*o.d, 2) : "d = " + op.spec.controller + "(alpha)");
-  plot::Figure fig(grid, fo);
+  plot::Figure fig(field.grid, fo);
   for (int l = 1; l <= 9; ++l)
     if (l != 5) fig.add_iso_lines(0.1f * l, {0.15, 0.15, 0.15}, 0.7);
   fig.add_iso_lines(0.5f, {1, 1, 1}, 2.5);
-  fig.add_segments(contact, {0.1, 0.85, 0.2}, 3.0);
+  fig.add_segments(field.contact, {0.1, 0.85, 0.2}, 3.0);
   fig.add_polyline({a, j, b}, {0.9, 0.2, 0.6}, 1.5, true);
   fig.add_caption("white: composed 0.5 iso-line; green: contact part (inside both capsules); dashed: bones");
   fig.add_caption("contact length " + fmt(st.contact_length, 3) + " (capsule radius " + fmt(o.radius, 2) +

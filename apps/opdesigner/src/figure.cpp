@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <memory>
 #include <stdexcept>
@@ -250,6 +251,64 @@ void Figure::save(const std::string& path) const {
             std::string("Cairo cannot write it (") + cairo_status_to_string(status) + ")",
             "check that the folder is writable and the disk has space");
   });
+}
+
+void write_png(const std::string& path, const RgbaImage& image) {
+  require(image.width > 0 && image.height > 0 &&
+              image.pixels.size() == 4 * static_cast<std::size_t>(image.width) * image.height,
+          "image for '" + path + "'", "is empty or its pixel count does not match its size",
+          "pass width * height RGBA pixels");
+  // Cairo's ARGB32 is premultiplied, native-endian 32-bit words; screenshots are opaque.
+  std::unique_ptr<cairo_surface_t, decltype(&cairo_surface_destroy)> surface(
+      cairo_image_surface_create(CAIRO_FORMAT_ARGB32, image.width, image.height), cairo_surface_destroy);
+  cairo_surface_flush(surface.get());
+  unsigned char* data = cairo_image_surface_get_data(surface.get());
+  const int stride = cairo_image_surface_get_stride(surface.get());
+  for (int y = 0; y < image.height; ++y) {
+    auto* row = reinterpret_cast<std::uint32_t*>(data + static_cast<std::size_t>(y) * stride);
+    for (int x = 0; x < image.width; ++x) {
+      const std::uint8_t* p = image.at(x, y);
+      const std::uint32_t a = p[3];
+      const auto pm = [a](std::uint32_t c) { return (c * a + 127) / 255; };
+      row[x] = (a << 24) | (pm(p[0]) << 16) | (pm(p[1]) << 8) | pm(p[2]);
+    }
+  }
+  cairo_surface_mark_dirty(surface.get());
+  write_file_atomically(path, [&](const std::string& tmp) {
+    const cairo_status_t status = cairo_surface_write_to_png(surface.get(), tmp.c_str());
+    require(status == CAIRO_STATUS_SUCCESS, "PNG file '" + path + "'",
+            std::string("Cairo cannot write it (") + cairo_status_to_string(status) + ")",
+            "check that the folder is writable and the disk has space");
+  });
+}
+
+RgbaImage read_png(const std::string& path) {
+  std::unique_ptr<cairo_surface_t, decltype(&cairo_surface_destroy)> surface(
+      cairo_image_surface_create_from_png(path.c_str()), cairo_surface_destroy);
+  const cairo_status_t status = cairo_surface_status(surface.get());
+  require(status == CAIRO_STATUS_SUCCESS, "PNG file '" + path + "'",
+          std::string("cannot be read (") + cairo_status_to_string(status) + ")", "check the path");
+  cairo_surface_flush(surface.get());
+  RgbaImage out;
+  out.width = cairo_image_surface_get_width(surface.get());
+  out.height = cairo_image_surface_get_height(surface.get());
+  out.pixels.resize(4 * static_cast<std::size_t>(out.width) * out.height);
+  const unsigned char* data = cairo_image_surface_get_data(surface.get());
+  const int stride = cairo_image_surface_get_stride(surface.get());
+  const bool has_alpha = cairo_image_surface_get_format(surface.get()) == CAIRO_FORMAT_ARGB32;
+  for (int y = 0; y < out.height; ++y) {
+    const auto* row = reinterpret_cast<const std::uint32_t*>(data + static_cast<std::size_t>(y) * stride);
+    for (int x = 0; x < out.width; ++x) {
+      const std::uint32_t w = row[x], a = has_alpha ? (w >> 24) : 255;
+      const auto un = [a](std::uint32_t c) { return a == 0 ? 0u : std::min(255u, (c * 255 + a / 2) / a); };
+      std::uint8_t* p = &out.pixels[4 * (static_cast<std::size_t>(y) * out.width + x)];
+      p[0] = std::uint8_t(un((w >> 16) & 255));
+      p[1] = std::uint8_t(un((w >> 8) & 255));
+      p[2] = std::uint8_t(un(w & 255));
+      p[3] = std::uint8_t(a);
+    }
+  }
+  return out;
 }
 
 }  // namespace isokit::plot

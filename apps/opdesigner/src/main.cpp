@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: MIT
-// isokit-opdesigner: generate, plot, compose and inspect composition operators (2014 §4).
+// isokit-opdesigner: generate, plot, compose and inspect composition operators (2014 §4), and
+// design them interactively (`gui`).
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
@@ -14,6 +15,7 @@
 #include "isokit/operators/biharmonic.h"
 #include "isokit/operators/checks.h"
 #include "isokit/operators/io.h"
+#include "isokit/studio/gui.h"
 
 using namespace isokit;
 using namespace isokit::operators;
@@ -109,6 +111,42 @@ int run_inspect(const std::string& path, bool quiet) {
   return bad == 0 ? 0 : 3;
 }
 
+/// `gui [SPEC] [--size WxH] [--script FILE] [--screenshot-dir DIR] [--report FILE] [--res N]`.
+CLI::App* add_gui_command(CLI::App& app, studio::GuiOptions& o, std::string& size) {
+  auto* gui =
+      app.add_subcommand("gui", "the interactive operator design studio (GLFW + OpenGL + Dear ImGui)");
+  gui->add_option("spec", o.spec_path, "operator spec JSON to open (default: --preset)");
+  gui->add_option("--preset", o.preset, "preset to start from without a spec: " + join(preset_spec_names()));
+  gui->add_option("--res", o.resolution, "override the grid resolution and slice count (e.g. 48 for tests)");
+  gui->add_option("--size", size, "window size WxH (default 1280x800)");
+  gui->add_option("--script", o.script_path,
+                  "replay input events from a JSON script, then exit (headless tests)");
+  gui->add_option("--screenshot-dir", o.screenshot_dir, "folder for the script's screenshots (default .)");
+  gui->add_option("--report", o.report_path,
+                  "JSON report at exit (default with --script: DIR/studio-report.json)");
+  gui->add_option("--recent-files", o.recent_files,
+                  "recent-files list: a JSON path, \"\" for none, or default");
+  return gui;
+}
+
+int run_gui_command(studio::GuiOptions o, const std::string& size) {
+  if (!size.empty()) {
+    const auto x = size.find('x');
+    require(x != std::string::npos, "--size", "is not WxH (got '" + size + "')", "e.g. --size 1280x800");
+    o.width = std::stoi(size.substr(0, x));
+    o.height = std::stoi(size.substr(x + 1));
+    require(o.width >= 320 && o.height >= 240 && o.width <= 8192 && o.height <= 8192, "--size",
+            "must be between 320x240 and 8192x8192 (got '" + size + "')", "e.g. --size 1280x800");
+  }
+#ifdef ISOKIT_HAVE_GUI
+  return studio::run_gui(o);
+#else
+  require(false, "isokit-opdesigner gui", "this build has no GUI (GLFW, OpenGL or imgui was not found)",
+          "run scripts/install-deps.sh and reconfigure with -DISOKIT_GUI=ON");
+  return 1;
+#endif
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -147,6 +185,10 @@ int main(int argc, char** argv) {
   insp->add_option("operator", in_path, "X.npy (with X.json beside it)")->required();
   insp->add_flag("--summary", quiet, "print only the worst values");
 
+  studio::GuiOptions gui_options;
+  std::string gui_size;
+  auto* gui = add_gui_command(app, gui_options, gui_size);
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -169,6 +211,7 @@ int main(int argc, char** argv) {
       return 0;
     }
     if (insp->parsed()) return run_inspect(in_path, quiet);
+    if (gui->parsed()) return run_gui_command(gui_options, gui_size);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "isokit-opdesigner: error: %s\n", e.what());
     return 1;

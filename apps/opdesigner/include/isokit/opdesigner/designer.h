@@ -4,10 +4,13 @@
 /// style), the 2D composition of two capsule fields at a joint (Fig. 5b style), inspection.
 #pragma once
 
+#include <array>
 #include <optional>
 #include <string>
 
+#include "isokit/operators/controller.h"
 #include "isokit/operators/io.h"
+#include "isokit/plot/figure.h"
 
 namespace isokit::opdesigner {
 
@@ -28,6 +31,18 @@ struct ComposeStats {
   double contact_length{0};  ///< length of the contact part of the 0.5 iso-line (both fields > 0.5)
   double max_d{0};           ///< largest d used
 };
+
+/// The composed field of `compose` without the figure (shared by `compose` and the design studio's
+/// live preview): two capsules along the bones composed by `op`, d from `controller` (or the fixed
+/// `options.d`). \throw isokit::InputError for an angle, d or sample count out of range.
+struct ComposedField {
+  plot::ScalarGrid grid;                ///< g over [-1.6, 1.6]², options.samples per axis
+  std::vector<plot::Segment2> contact;  ///< contact part of the 0.5 iso-line (both fields > 0.5)
+  std::array<plot::Point2, 3> bones{};  ///< bone 1 start, joint (origin), bone 2 end
+  ComposeStats stats;
+};
+ComposedField compose_field(const operators::GridOperator& op, const operators::ControllerTable& controller,
+                            const ComposeOptions& options);
 
 /// Two 2D capsule fields f(r) = (1 - (r/R)²)³ (0.5 at r = radius) along bones meeting at the
 /// origin, bone 1 from (-1.2, 0) to (0, 0), bone 2 from (0, 0) along angle `angle_deg`, composed

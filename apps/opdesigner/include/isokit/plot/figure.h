@@ -7,6 +7,7 @@
 #pragma once
 
 #include <array>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -38,6 +39,22 @@ double total_length(const std::vector<Segment2>& segments);
 
 /// Colour of `t` in [0, 1] on isokit's sequential map (dark blue -> teal -> yellow).
 Rgb colormap(double t);
+
+/// An 8-bit RGBA image, rows top to bottom, `pixels[4 * (y * width + x) + c]`.
+struct RgbaImage {
+  int width{0}, height{0};
+  std::vector<std::uint8_t> pixels;
+
+  const std::uint8_t* at(int x, int y) const {
+    return &pixels[4 * (static_cast<std::size_t>(y) * width + x)];
+  }
+};
+
+/// Writes `image` as a PNG (atomically). \throw isokit::InputError naming `path` if the image is
+/// empty or the file cannot be written.
+void write_png(const std::string& path, const RgbaImage& image);
+/// Reads a PNG into RGBA. \throw isokit::InputError naming `path` if it cannot be read as a PNG.
+RgbaImage read_png(const std::string& path);
 
 struct FigureOptions {
   int pixel_size = 640;  ///< Width of the plot area in pixels (height follows the aspect ratio).

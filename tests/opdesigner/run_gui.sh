@@ -1,0 +1,20 @@
+#!/bin/sh
+# The `gui` test: runs isokit-opdesigner gui under Xvfb (Mesa software GL) with a scripted drag
+# of a control point, Ctrl+Z and Ctrl+Y, then checks the report and screenshots (gui_check).
+# Exits 77 (CTest: skipped) without xvfb-run. With ISOKIT_UPDATE_DOC_IMAGES=1 the screenshots are
+# copied to docs/images/ (the studio's pictures in docs/operators.md come from this test).
+# Usage: run_gui.sh EXE CHECK SCRIPT OUT DOC_IMAGES
+set -u
+exe=$1 check=$2 script=$3 out=$4 doc_images=$5
+if ! command -v xvfb-run >/dev/null 2>&1; then
+  echo "SKIPPED: xvfb-run not found (apt-get install xvfb xauth libgl1-mesa-dri)"
+  exit 77
+fi
+rm -rf "$out" && mkdir -p "$out" || exit 1
+LIBGL_ALWAYS_SOFTWARE=1 xvfb-run -a -s "-screen 0 1280x1024x24" \
+  "$exe" gui --preset contact --res 48 --size 1280x800 --script "$script" --screenshot-dir "$out" \
+  --recent-files "" || { echo "isokit-opdesigner gui failed"; exit 1; }
+"$check" "$out/studio-report.json" || exit 1
+if [ "${ISOKIT_UPDATE_DOC_IMAGES:-0}" = 1 ]; then
+  cp "$out"/studio-*.png "$doc_images"/ && echo "copied the screenshots to $doc_images"
+fi
