@@ -324,3 +324,25 @@ TEST_CASE("studio: random edits keep the solved grid equal to generate(spec)", "
     check_grid_is_generated(model);
   }
 }
+
+TEST_CASE("studio: live checks of the displayed slice mark where the iso-line leaves the profile",
+          "[studio]") {
+  StudioModel model(small_spec("contact"), test_options());
+  model.set_d(0.5);
+  const LiveCheck& good = model.live_check();
+  CHECK(good.current);
+  CHECK(good.report.slice == model.slice());
+  CHECK(!good.failure);
+  CHECK(good.stray_crossings.empty());
+  CHECK(good.unmatched_profile.empty());
+  // The boundary pulled off the f2 axis: the 0.5 iso-line must still reach (0, 0.5) (eq. 1), away
+  // from the profile the designer drew.
+  REQUIRE(model.begin_drag({0, 0}));
+  REQUIRE(model.drag_to({0.3, 0.5}));
+  model.end_drag();
+  const LiveCheck& bad = model.live_check();
+  REQUIRE(bad.failure);
+  CHECK(bad.failure->slice == model.slice());
+  CHECK(!bad.stray_crossings.empty());
+  for (const Point2& p : bad.stray_crossings) CHECK(p[0] < 0.3);  // between the axis and the profile
+}
