@@ -54,7 +54,9 @@ int ensure_keyframe(ProfileCurve& curve, double d, double tolerance) {
   Keyframe kf{d, curve.control_points(d)};
   const auto at = std::find_if(curve.keyframes.begin(), curve.keyframes.end(),
                                [&](const Keyframe& k) { return k.d > d; });
-  return int(curve.keyframes.insert(at, std::move(kf)) - curve.keyframes.begin());
+  const auto index = at - curve.keyframes.begin();
+  curve.keyframes.insert(at, std::move(kf));
+  return int(index);
 }
 
 OperatorSpec move_point(OperatorSpec spec, const CurvePoint& p, double d, double tolerance,
