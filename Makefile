@@ -11,7 +11,7 @@ EVAL_ARGS  ?=
 JOBS       ?= $(shell nproc)
 CMAKE_ARGS ?=
 
-.PHONY: all deps configure build demo eval test test-release test-asan bench fuzz clean
+.PHONY: all deps configure build demo eval test test-release test-asan bench bench-studio fuzz clean
 
 all: build
 
@@ -69,6 +69,11 @@ bench: build
 	  --benchmark_out=$(BUILD)/bench-results/skinning.json --benchmark_out_format=json
 	$(BUILD)/bench/isokit-bench-report $(BUILD)/bench-results/skinning.json \
 	  --baseline BM_SkinFrame/1/13000/50/iterations:1/manual_time
+
+# The design studio under Xvfb: a recorded drag in a 1280x800 window, 5 runs, with BM_EditSlice
+# from the same session (re-solve ms, input-to-redraw latency in frames, fps; docs/performance.md).
+bench-studio: build
+	bench/studio/studio-bench.py $(BUILD) --runs 5
 
 # libFuzzer targets (clang, ASan + UBSan; docs/fuzzing.md): builds them in $(FUZZ_BUILD), writes
 # the seed corpora with the project's own writers, runs each target for $(FUZZ_SECONDS) s, one at a

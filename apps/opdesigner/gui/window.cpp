@@ -240,6 +240,7 @@ int run_gui(const GuiOptions& o) {
                    {"final", snapshot(*model, panels.layout(), stats.frame)},
                    {"messages", panels.messages()},
                    {"resolution", model->spec().resolution},
+                   {"gl_renderer", reinterpret_cast<const char*>(glGetString(GL_RENDERER))},
                    {"window", {o.width, o.height}}};
     write_text_file_atomically(report_path, report.dump(1) + "\n");
   }
