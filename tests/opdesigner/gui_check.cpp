@@ -117,6 +117,21 @@ int main(int argc, char** argv) {
     expect(named(marks, "undone")["can_redo"].get<bool>(), "Ctrl+Z left a redo step");
     expect(dist(point(named(marks, "redone"), 1, 1), p1) < 1e-9, "Ctrl+Y replayed the drag");
     expect(named(marks, "redone")["fully_solved"].get<bool>(), "every slice solved at the end");
+    const json& failed = named(shots, "studio-check");
+    expect(!failed["check"].is_null(),
+           "a contact line run into the f1 = 1 edge fails a check: " + failed["check"].dump());
+    const RgbaImage check_img = isokit::plot::read_png(failed["file"]);
+    int marked = 0;
+    for (const auto& px : failed["check_marks_px"])
+      for (int dy = -6; dy <= 6; ++dy)
+        for (int dx = -6; dx <= 6; ++dx) {
+          const int x = int(px[0].get<double>()) + dx, y = int(px[1].get<double>()) + dy;
+          if (x >= 0 && y >= 0 && x < check_img.width && y < check_img.height &&
+              near_colour(check_img.at(x, y), r["check_rgb"], 40))
+            ++marked;
+        }
+    expect(failed["check_marks_px"].size() > 0 && marked > 10,
+           "the offending region is marked in red (" + std::to_string(marked) + " red pixels at the marks)");
     const json& lat = r["timing"]["latency_frames"];
     expect(lat["count"].get<int>() > 0 && lat["max"].get<int>() <= 2,
            "input to redrawn slice within 2 frames (max " + lat["max"].dump() + ")");

@@ -233,9 +233,17 @@ void Panels::draw_check_marks(ImDrawList* dl) {
   const LiveCheck& check = model_.live_check();
   if (!check.failure) return;
   const PlotMapping& m = layout_.op;
-  const ImU32 red = IM_COL32(255, 30, 30, 255);
+  const ImU32 red = rgb(kCheckRgb);
+  ImVec2 lo(1e9f, 1e9f), hi(-1e9f, -1e9f);
   for (const auto* set : {&check.stray_crossings, &check.unmatched_profile})
-    for (const auto& q : *set) dl->AddCircle(to_im(m.to_screen(q)), 4.f, red, 8, 2.f);
+    for (const auto& q : *set) {
+      const ImVec2 at = to_im(m.to_screen(q));
+      dl->AddCircle(at, 5.f, red, 10, 2.5f);
+      lo = ImVec2(std::min(lo.x, at.x), std::min(lo.y, at.y));
+      hi = ImVec2(std::max(hi.x, at.x), std::max(hi.y, at.y));
+    }
+  if (lo.x <= hi.x)  // the offending region: the marks' bounding box, padded
+    dl->AddRect(ImVec2(lo.x - 12, lo.y - 12), ImVec2(hi.x + 12, hi.y + 12), red, 4.f, ImDrawFlags_None, 2.5f);
   if (check.failure->check.rfind("boundary", 0) == 0)  // the failing edge values: outline the square
     dl->AddRect(ImVec2(float(m.left), float(m.top)), ImVec2(float(m.left + m.width), float(m.top + m.height)),
                 red, 0.f, ImDrawFlags_None, 4.f);

@@ -154,7 +154,7 @@ void Panels::draw_controller_plot() {
     dl->AddCircleFilled(to_im(m.to_screen({k.alpha, k.d})), 5.f, IM_COL32(240, 200, 60, 255), 12);
   }
   dl->AddText(ImVec2(o.x + 4, o.y + 2), IM_COL32(200, 200, 200, 255), "d=1");
-  dl->AddText(ImVec2(o.x + w - 40, o.y + h - 16), IM_COL32(200, 200, 200, 255), "alpha=pi");
+  dl->AddText(ImVec2(o.x + w - 70, o.y + h - 16), IM_COL32(200, 200, 200, 255), "alpha=pi");
 }
 
 void Panels::draw_preview() {

@@ -91,6 +91,12 @@ json snapshot(StudioModel& model, const gui::Layout& layout, int frame) {
     }
   }
   const LiveCheck& check = model.live_check();
+  json marks = json::array();
+  for (const auto* set : {&check.stray_crossings, &check.unmatched_profile})
+    for (const auto& q : *set) {
+      const plot::Point2 px = layout.op.to_screen(q);
+      marks.push_back({px[0], px[1]});
+    }
   return {{"frame", frame},
           {"d", model.d()},
           {"slice", model.slice()},
@@ -100,6 +106,7 @@ json snapshot(StudioModel& model, const gui::Layout& layout, int frame) {
           {"modified", model.modified()},
           {"points", points},
           {"check", check.failure ? json(check.failure->message()) : json(nullptr)},
+          {"check_marks_px", marks},
           {"plot", {layout.op.left, layout.op.top, layout.op.width, layout.op.height}}};
 }
 
@@ -235,6 +242,7 @@ int run_gui(const GuiOptions& o) {
                    {"drag", drag_summary(frame_ms, drags)},
                    {"drag_ui", drag_summary(ui_ms, drags)},
                    {"handle_rgb", {gui::kHandleRgb[0], gui::kHandleRgb[1], gui::kHandleRgb[2]}},
+                   {"check_rgb", {gui::kCheckRgb[0], gui::kCheckRgb[1], gui::kCheckRgb[2]}},
                    {"screenshots", shots},
                    {"marks", marks},
                    {"final", snapshot(*model, panels.layout(), stats.frame)},
