@@ -2,7 +2,7 @@
 # The `gui` test: runs isokit-opdesigner gui under Xvfb (Mesa software GL) with a scripted drag
 # of a control point, Ctrl+Z and Ctrl+Y, then checks the report and screenshots (gui_check).
 # Exits 77 (CTest: skipped) without xvfb-run. With ISOKIT_UPDATE_DOC_IMAGES=1 the screenshots are
-# copied to docs/images/ (the studio's pictures in docs/operators.md come from this test).
+# copied to docs/figures/ (the studio's pictures in docs/operators.md come from this test).
 # Usage: run_gui.sh EXE CHECK SCRIPT OUT DOC_IMAGES
 set -u
 exe=$1 check=$2 script=$3 out=$4 doc_images=$5
@@ -16,5 +16,8 @@ LIBGL_ALWAYS_SOFTWARE=1 xvfb-run -a -s "-screen 0 1280x1024x24" \
   --recent-files "" || { echo "isokit-opdesigner gui failed"; exit 1; }
 "$check" "$out/studio-report.json" || exit 1
 if [ "${ISOKIT_UPDATE_DOC_IMAGES:-0}" = 1 ]; then
-  cp "$out"/studio-*.png "$doc_images"/ && echo "copied the screenshots to $doc_images"
+  for name in studio-before studio-dragged studio-check; do
+    cp "$out/$name.png" "$doc_images/$name.png" || exit 1
+  done
+  echo "copied the screenshots to $doc_images"
 fi
