@@ -92,13 +92,15 @@ void Panels::report(const std::string& message) {
   messages_.push_back(message);
 }
 
+// The full-window panel has no background of its own: the frame's glClear paints it, which saves
+// a blended full-screen layer (software GL is fill-bound).
 void Panels::draw(FrameStats& stats) {
   const ImGuiIO& io = ImGui::GetIO();
   ImGui::SetNextWindowPos(ImVec2(0, 0));
   ImGui::SetNextWindowSize(io.DisplaySize);
   ImGui::Begin("isokit operator studio", nullptr,
                ImGuiWindowFlags_NoDecoration | ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoSavedSettings |
-                   ImGuiWindowFlags_NoBringToFrontOnFocus);
+                   ImGuiWindowFlags_NoBringToFrontOnFocus | ImGuiWindowFlags_NoBackground);
   handle_shortcuts();
   run_pending_actions();
   const float side = std::clamp(io.DisplaySize.x * 0.38f, 320.f, 520.f);

@@ -223,7 +223,7 @@ int run_gui(const GuiOptions& o) {
     int fw = 0, fh = 0;
     glfwGetFramebufferSize(window, &fw, &fh);
     glViewport(0, 0, fw, fh);
-    glClearColor(0.08f, 0.08f, 0.1f, 1.f);
+    glClearColor(0.06f, 0.06f, 0.07f, 1.f);
     glClear(GL_COLOR_BUFFER_BIT);
     ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
     if (player)
