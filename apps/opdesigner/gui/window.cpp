@@ -197,8 +197,8 @@ struct ImGuiSession {
 int run_gui(const GuiOptions& o) {
   std::vector<ScriptEvent> events;
   if (!o.script_path.empty()) events = load_script(o.script_path);
+  GlfwSession glfw;  // first: without a display, fail before solving anything
   std::unique_ptr<StudioModel> model = open_model(o);
-  GlfwSession glfw;
   GLFWwindow* window = open_window(o);
   ImGuiSession imgui(window);
   gui::Panels panels(*model, o);

@@ -132,7 +132,10 @@ CLI::App* add_gui_command(CLI::App& app, studio::GuiOptions& o, std::string& siz
 int run_gui_command(studio::GuiOptions o, const std::string& size) {
   if (!size.empty()) {
     const auto x = size.find('x');
-    require(x != std::string::npos, "--size", "is not WxH (got '" + size + "')", "e.g. --size 1280x800");
+    const bool digits = x != std::string::npos && size.find('x', x + 1) == std::string::npos && x > 0 &&
+                        x + 1 < size.size() && size.find_first_not_of("0123456789x") == std::string::npos &&
+                        x + 6 >= size.size() && x <= 5;
+    require(digits, "--size", "is not WxH (got '" + size + "')", "e.g. --size 1280x800");
     o.width = std::stoi(size.substr(0, x));
     o.height = std::stoi(size.substr(x + 1));
     require(o.width >= 320 && o.height >= 240 && o.width <= 8192 && o.height <= 8192, "--size",
