@@ -257,6 +257,36 @@ TEST_CASE("studio: undo depth is bounded", "[studio]") {
   CHECK(model.undo());
   CHECK(!model.undo());
   CHECK(model.spec().controller_knots.size() == 3);  // the preset's two plus the first add
+  // By memory: two drags of ~30 changed slices (4 KiB each) do not fit in 0.1 MiB.
+  o.undo_depth = 100;
+  o.undo_memory_mib = 0.1;
+  StudioModel bounded(small_spec("contact"), o);
+  bounded.set_d(0.5);
+  for (double x : {0.7, 0.72}) {
+    REQUIRE(bounded.begin_drag({1, 1}));
+    REQUIRE(bounded.drag_to({x, 0.7}));
+    bounded.end_drag();
+  }
+  CHECK(bounded.undo());
+  CHECK(!bounded.undo());
+  o.undo_memory_mib = 0;
+  CHECK_THROWS_AS(StudioModel(small_spec("contact"), o), InputError);
+}
+
+TEST_CASE("studio: new document and rename", "[studio]") {
+  StudioModel model(small_spec("contact"), test_options());
+  REQUIRE(model.rename("mine"));
+  CHECK(model.spec().name == "mine");
+  CHECK(model.modified());
+  REQUIRE(model.undo());
+  CHECK(model.spec().name == small_spec("contact").name);
+  CHECK_THROWS_AS(model.new_document(OperatorSpec{}), InputError);  // no curves
+  CHECK(model.spec().curves.size() == 2);
+  model.new_document(small_spec("bulge"));
+  CHECK(model.spec() == small_spec("bulge"));
+  CHECK(model.document_path().empty());
+  CHECK(!model.can_undo());
+  check_grid_is_generated(model);
 }
 
 TEST_CASE("studio: save, open, export and recent files", "[studio]") {

@@ -90,6 +90,7 @@ struct StudioModel::Impl {
   void post_pending();
   void apply(OperatorSpec next, Step& step);
   void push(Step step);
+  void trim_history();
   void poll();
   void wait(const ProgressFn& progress);
   void swap_slices(Step& step, bool to_before);
@@ -98,6 +99,7 @@ struct StudioModel::Impl {
 
 StudioModel::Impl::Impl(OperatorSpec s, const StudioOptions& o) : options(o), spec(std::move(s)) {
   require(options.undo_depth >= 1, "undo_depth", "must be at least 1", "keep one undo step or more");
+  require(options.undo_memory_mib > 0, "undo_memory_mib", "must be positive", "give the memory in MiB");
   operators::validate(spec, "studio");
   generator = std::make_unique<operators::BiharmonicOperatorGenerator>(spec, generator_options(options));
   grid = GridOperator(
@@ -164,8 +166,26 @@ void StudioModel::Impl::apply(OperatorSpec next, Step& step) {
 
 void StudioModel::Impl::push(Step step) {
   undo.push_back(std::move(step));
-  while (int(undo.size()) > options.undo_depth) undo.pop_front();
   redo.clear();
+  trim_history();
+}
+
+// Drops the oldest undo steps beyond undo_depth or undo_memory_mib (keeping the newest).
+void StudioModel::Impl::trim_history() {
+  auto bytes = [](const Step& step) {
+    double total = 0;
+    for (const auto& entry : step.slices)
+      total += double(entry.second.before.size() + entry.second.after.size()) * sizeof(float);
+    return total;
+  };
+  double total = 0;
+  for (const Step& step : undo) total += bytes(step);
+  for (const Step& step : redo) total += bytes(step);
+  const double limit = options.undo_memory_mib * 1024.0 * 1024.0;
+  while (undo.size() > 1 && (int(undo.size()) > options.undo_depth || total > limit)) {
+    total -= bytes(undo.front());
+    undo.pop_front();
+  }
 }
 
 // Publishes background results still valid: the slice is unsolved and no edit changed it after
@@ -250,12 +270,16 @@ StudioModel::StudioModel(OperatorSpec spec, StudioOptions options)
 
 StudioModel::~StudioModel() = default;
 
-void StudioModel::open(const std::string& path) {
-  OperatorSpec spec = operators::load_spec(path);
+void StudioModel::new_document(OperatorSpec spec) {
   auto fresh = std::make_unique<Impl>(std::move(spec), impl_->options);
   impl_ = std::move(fresh);
-  document_path_ = path;
+  document_path_.clear();
   saved_spec_ = impl_->spec;
+}
+
+void StudioModel::open(const std::string& path) {
+  new_document(operators::load_spec(path));
+  document_path_ = path;
   recent_.add(path);
 }
 
@@ -466,6 +490,14 @@ EditResult StudioModel::delete_knot(int i) {
   return commit([&](const OperatorSpec& s) { return detail::remove_knot(s, i); });
 }
 
+EditResult StudioModel::rename(const std::string& name) {
+  return commit([&](const OperatorSpec& s) {
+    OperatorSpec next = s;
+    next.name = name;
+    return next;
+  });
+}
+
 EditResult StudioModel::add_curve(CurveKind kind, CurveType type, std::vector<Point2> points) {
   return commit([&](const OperatorSpec& s) { return detail::append_curve(s, kind, type, points); });
 }
@@ -492,6 +524,7 @@ bool StudioModel::undo(const ProgressFn& progress) {
   m.undo.pop_back();
   m.swap_slices(step, true);
   m.redo.push_back(std::move(step));
+  m.trim_history();
   select(m.selection);
   return true;
 }

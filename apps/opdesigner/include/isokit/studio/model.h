@@ -58,6 +58,10 @@ struct StudioOptions {
   operators::SparseBackend backend{operators::SparseBackend::kAuto};
   /// Undo steps kept (oldest dropped first), ≥ 1. Default 100.
   int undo_depth{100};
+  /// Memory of the slice values kept for undo/redo (a step keeps the slices it changed, up to
+  /// 2 x 64 KiB each at 128²): the oldest steps are dropped beyond it, the last one always kept.
+  /// Default 1024 MiB.
+  double undo_memory_mib{1024};
   /// Recent-files list: nullopt = default_recent_files_path(); "" = in memory only (tests).
   std::optional<std::string> recent_files_path;
   /// Recent files kept. Default 10.
@@ -123,6 +127,9 @@ class StudioModel {
   /// Replaces the document by the spec at `path` (history cleared, slice 0 displayed) and adds it
   /// to the recent files. \throw isokit::InputError (load_spec's message); the model is unchanged.
   void open(const std::string& path);
+  /// Replaces the document by `spec` (e.g. a preset: "New"), with no document path and an empty
+  /// history. \throw isokit::InputError for an invalid spec; the model is unchanged.
+  void new_document(OperatorSpec spec);
   /// Writes the spec atomically (operators::save_spec), makes `path` the document path and adds
   /// it to the recent files. \throw isokit::InputError naming the file.
   void save_spec(const std::string& path);
@@ -197,6 +204,8 @@ class StudioModel {
   EditResult add_knot(double alpha, double d);
   EditResult move_knot(int i, double alpha, double d);
   EditResult delete_knot(int i);
+  /// Renames the operator (spec().name). The grid does not change.
+  EditResult rename(const std::string& name);
   /// Appends a curve with one keyframe (the same points for every d).
   EditResult add_curve(CurveKind kind, CurveType type, std::vector<Point2> points);
   /// Removes curve `c` (refused when it is the last boundary curve).
