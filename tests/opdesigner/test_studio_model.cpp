@@ -376,3 +376,26 @@ TEST_CASE("studio: live checks of the displayed slice mark where the iso-line le
   CHECK(!bad.stray_crossings.empty());
   for (const Point2& p : bad.stray_crossings) CHECK(p[0] < 0.3);  // between the axis and the profile
 }
+
+TEST_CASE("studio: a drag out of the edit band re-centres the band on the new profile", "[studio]") {
+  StudioModel model(small_spec("contact"), test_options());
+  model.set_d(1.0);
+  REQUIRE(model.begin_drag({1, 1}));
+  REQUIRE(model.drag_to({0.15, 0.9}));  // far from every slice's contact line: > 3 cells
+  CHECK(!model.last_solve_was_schur());
+  check_displayed_is_current(model);
+  model.end_drag();
+  CHECK(model.recentring());
+  check_grid_is_generated(model);
+  CHECK(!model.recentring());
+  REQUIRE(model.begin_drag({1, 1}));
+  REQUIRE(model.drag_to({0.16, 0.9}));
+  CHECK(model.last_solve_was_schur());
+  model.end_drag();
+  check_displayed_is_current(model);
+  check_grid_is_generated(model);
+  REQUIRE(model.undo());
+  REQUIRE(model.undo());
+  CHECK(model.spec() == small_spec("contact"));
+  check_grid_is_generated(model);
+}

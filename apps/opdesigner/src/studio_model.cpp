@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstring>
 #include <deque>
+#include <future>
 #include <limits>
 #include <map>
 #include <utility>
@@ -67,6 +68,10 @@ struct StudioModel::Impl {
   int slice{0};
   std::optional<CurvePoint> selection;
   std::unique_ptr<operators::BiharmonicOperatorGenerator> generator;  // GUI thread's
+  // Edit band re-centring: a generator being built around a newer profile, and whether a solve
+  // left the band since the last rebuild started.
+  std::future<std::unique_ptr<operators::BiharmonicOperatorGenerator>> rebuilt;
+  bool left_band{false};
   std::unique_ptr<detail::BackgroundSolver> background;
   double last_ms{0};
   bool last_schur{false};
@@ -94,6 +99,8 @@ struct StudioModel::Impl {
   void poll();
   void wait(const ProgressFn& progress);
   void swap_slices(Step& step, bool to_before);
+  void recentre_band();
+  void adopt_rebuilt(bool block);
   LiveCheck compute_check();
 };
 
@@ -119,6 +126,7 @@ void StudioModel::Impl::solve_now(int k) {
   const std::vector<float> v = generator->solve_edited(slice_d(k), spec);
   last_ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
   last_schur = generator->last_edit_was_schur();
+  left_band |= !last_schur;
   std::memcpy(values(k), v.data(), v.size() * sizeof(float));
   if (!solved[static_cast<std::size_t>(k)]) --pending;
   solved[static_cast<std::size_t>(k)] = 1;
@@ -200,6 +208,7 @@ void StudioModel::Impl::poll() {
     --pending;
   }
   background_error = background->error();
+  adopt_rebuilt(false);
 }
 
 void StudioModel::Impl::wait(const ProgressFn& progress) {
@@ -213,6 +222,29 @@ void StudioModel::Impl::wait(const ProgressFn& progress) {
     background->wait(std::chrono::milliseconds(20));
   }
   if (progress) progress(pending_total, pending_total);
+  adopt_rebuilt(true);
+}
+
+// After an edit step: when a solve of the step left the edit band, builds generators around the
+// current profile (GUI one on another thread, adopted by poll(); the background's before its
+// next slice), so the next drags near it are Schur solves again (docs/performance.md).
+void StudioModel::Impl::recentre_band() {
+  if (!left_band || rebuilt.valid()) return;
+  left_band = false;
+  const operators::BiharmonicOptions o = generator_options(options);
+  rebuilt = std::async(std::launch::async, [s = spec, o] {
+    return std::make_unique<operators::BiharmonicOperatorGenerator>(s, o);
+  });
+  background->rebase(spec);
+}
+
+// Takes the rebuilt generator when it is ready (or waits for it with `block`), then starts the
+// next rebuild if a solve left the band meanwhile.
+void StudioModel::Impl::adopt_rebuilt(bool block) {
+  if (!rebuilt.valid()) return;
+  if (!block && rebuilt.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return;
+  generator = rebuilt.get();
+  recentre_band();
 }
 
 // Undo (`to_before`) or redo of `step` on a fully solved grid: exchanges the slices' values.
@@ -408,6 +440,7 @@ EditResult StudioModel::commit(const std::function<OperatorSpec(const OperatorSp
   impl_->apply(std::move(next), step);
   step.after = impl_->spec;
   impl_->push(std::move(step));
+  impl_->recentre_band();
   select(impl_->selection);
   return {};
 }
@@ -452,6 +485,7 @@ void StudioModel::end_drag() {
   if (!m.moved) return;
   m.drag_step.after = m.spec;
   m.push(std::move(m.drag_step));
+  m.recentre_band();
 }
 
 bool StudioModel::dragging() const {
@@ -523,6 +557,7 @@ bool StudioModel::undo(const ProgressFn& progress) {
   Step step = std::move(m.undo.back());
   m.undo.pop_back();
   m.swap_slices(step, true);
+  m.recentre_band();
   m.redo.push_back(std::move(step));
   m.trim_history();
   select(m.selection);
@@ -537,6 +572,7 @@ bool StudioModel::redo(const ProgressFn& progress) {
   Step step = std::move(m.redo.back());
   m.redo.pop_back();
   m.swap_slices(step, false);
+  m.recentre_band();
   m.undo.push_back(std::move(step));
   select(m.selection);
   return true;
@@ -558,6 +594,9 @@ bool StudioModel::fully_solved() const {
 }
 void StudioModel::wait_until_solved(const ProgressFn& progress) {
   impl_->wait(progress);
+}
+bool StudioModel::recentring() const {
+  return impl_->rebuilt.valid();
 }
 const std::string& StudioModel::background_error() const {
   return impl_->background_error;

@@ -18,6 +18,11 @@
 /// rounding (≤ 1e-5). Save of the spec does not need the grid; export, undo and redo wait for
 /// the background first.
 ///
+/// Edit band: the generators precompute a band of `edit_band_cells` around the profile they
+/// were built for; a slice whose edited profile leaves it costs a numeric factorisation (~10x
+/// slower). When an edit step (a whole drag) left the band, both generators are rebuilt around
+/// the edited profile in the background (seconds at 128², `recentring()`), then adopted.
+///
 /// Keyframes: control points are keyframed over d and interpolated linearly (ProfileCurve).
 /// Point edits act at the displayed d: on the keyframe at that slice's d when one lies within
 /// half a slice, else on a new keyframe inserted at the slice's d (with the interpolated points)
@@ -226,6 +231,9 @@ class StudioModel {
   bool fully_solved() const;
   /// Polls until fully_solved(), calling `progress` between slices.
   void wait_until_solved(const ProgressFn& progress = {});
+  /// True while a generator is being rebuilt around the edited profile (see the file comment);
+  /// poll() adopts it, wait_until_solved() waits for it.
+  bool recentring() const;
   /// The last background failure ("" if none); its slices stay queued.
   const std::string& background_error() const;
 
