@@ -222,7 +222,6 @@ void StudioModel::Impl::wait(const ProgressFn& progress) {
     background->wait(std::chrono::milliseconds(20));
   }
   if (progress) progress(pending_total, pending_total);
-  adopt_rebuilt(true);
 }
 
 // After an edit step: when a solve of the step left the edit band, builds generators around the
@@ -594,6 +593,7 @@ bool StudioModel::fully_solved() const {
 }
 void StudioModel::wait_until_solved(const ProgressFn& progress) {
   impl_->wait(progress);
+  impl_->adopt_rebuilt(true);
 }
 bool StudioModel::recentring() const {
   return impl_->rebuilt.valid();

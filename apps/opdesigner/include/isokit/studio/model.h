@@ -156,7 +156,8 @@ class StudioModel {
   /// The displayed slice and its d (`k / (slices - 1)`).
   int slice() const;
   double d() const;
-  /// Shows slice `k` (clamped to the grid); solves it now if it is still queued.
+  /// Shows slice `k` (clamped to the grid); solves it now if it is still queued. Ends a drag in
+  /// progress (edits act at the displayed d).
   void set_slice(int k);
   /// Shows the slice nearest to `d` (clamped to [0, 1]).
   void set_d(double d);
@@ -229,7 +230,8 @@ class StudioModel {
   SolveProgress progress() const;
   /// True when every slice is solved for the current spec (as of the last poll()).
   bool fully_solved() const;
-  /// Polls until fully_solved(), calling `progress` between slices.
+  /// Polls until fully_solved(), calling `progress` between slices, then waits for a generator
+  /// being rebuilt (recentring()). Export, undo and redo wait for the slices only.
   void wait_until_solved(const ProgressFn& progress = {});
   /// True while a generator is being rebuilt around the edited profile (see the file comment);
   /// poll() adopts it, wait_until_solved() waits for it.
