@@ -324,34 +324,74 @@ TEST_CASE("studio: save, open, export and recent files", "[studio]") {
   std::filesystem::remove_all(dir);
 }
 
+namespace {
+
+// One random edit at a random slice: a drag of a few moves, a point added or deleted, a
+// keyframe, a knot, an undo or a redo (some are refused; the invariants hold either way).
+void random_edit(StudioModel& model, std::mt19937& rng) {
+  std::uniform_real_distribution<double> u(-0.04, 0.04);
+  model.set_slice(int(rng() % unsigned(model.spec().slices)));
+  const auto& curves = model.spec().curves;
+  const int c = int(rng() % curves.size());
+  const int n = int(curves[std::size_t(c)].keyframes[0].points.size());
+  switch (rng() % 8) {
+    case 0:
+    case 1: {
+      const CurvePoint p{c, int(rng() % unsigned(n))};
+      const Point2 q = model.control_points(c)[std::size_t(p.point)];
+      REQUIRE(model.begin_drag(p));
+      for (int m = 1; m <= 3; ++m) model.drag_to({q[0] + m * u(rng), q[1] + m * u(rng)});
+      model.end_drag();
+      break;
+    }
+    case 2:
+      model.add_point(c, int(rng() % unsigned(n - 1)), 0.3);
+      break;
+    case 3:
+      model.delete_point({c, int(rng() % unsigned(n))});
+      break;
+    case 4:
+      model.add_keyframe(c);
+      break;
+    case 5:
+      model.add_knot(0.2 + 2.7 * std::abs(u(rng)) / 0.04, 0.5);
+      break;
+    case 6:
+      model.undo();
+      break;
+    default:
+      model.redo();
+      break;
+  }
+}
+
+}  // namespace
+
 TEST_CASE("studio: random edits keep the solved grid equal to generate(spec)", "[studio]") {
-  for (unsigned seed = 1; seed <= 3; ++seed) {
+  for (unsigned seed = 1; seed <= 6; ++seed) {
     INFO("seed " << seed);
     std::mt19937 rng(seed);
-    std::uniform_real_distribution<double> u(-0.04, 0.04);
     StudioModel model(small_spec(seed % 2 ? "contact" : "bulge"), test_options());
-    for (int step = 0; step < 6; ++step) {
-      model.set_slice(int(rng() % 32));
-      const int action = int(rng() % 5);
-      const auto& curves = model.spec().curves;
-      const int c = int(rng() % curves.size());
-      const int n = int(curves[std::size_t(c)].keyframes[0].points.size());
-      if (action <= 1) {  // a drag of a few moves (some may be refused)
-        const CurvePoint p{c, int(rng() % n)};
-        const Point2 q = model.control_points(c)[std::size_t(p.point)];
-        REQUIRE(model.begin_drag(p));
-        for (int m = 1; m <= 3; ++m) model.drag_to({q[0] + m * u(rng), q[1] + m * u(rng)});
-        model.end_drag();
-      } else if (action == 2) {
-        model.add_point(c, int(rng() % (n - 1)), 0.3);
-      } else if (action == 3) {
-        model.undo();
-      } else {
-        model.redo();
-      }
+    model.wait_until_solved();
+    const OperatorSpec first = model.spec();
+    const std::vector<float> first_grid = model.grid().data();
+    for (int step = 0; step < 8; ++step) {
+      random_edit(model, rng);
       check_displayed_is_current(model);
     }
     check_grid_is_generated(model);
+    // Undo everything, then redo everything: both ends bit for bit.
+    const OperatorSpec last = model.spec();
+    const std::vector<float> last_grid = model.grid().data();
+    int steps = 0;
+    while (model.undo()) ++steps;
+    model.wait_until_solved();
+    CHECK(model.spec() == first);
+    CHECK(model.grid().data() == first_grid);
+    for (int i = 0; i < steps; ++i) REQUIRE(model.redo());
+    model.wait_until_solved();
+    CHECK(model.spec() == last);
+    CHECK(model.grid().data() == last_grid);
   }
 }
 
