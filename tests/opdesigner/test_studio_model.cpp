@@ -439,3 +439,23 @@ TEST_CASE("studio: a drag out of the edit band re-centres the band on the new pr
   CHECK(model.spec() == small_spec("contact"));
   check_grid_is_generated(model);
 }
+
+TEST_CASE("studio: at the real resolution (128²) drags are Schur solves and the grid is generated",
+          "[studio][slow]") {
+  OperatorSpec spec = preset_spec("bulge", 128);
+  spec.slices = 16;
+  StudioModel model(spec, test_options());
+  model.set_d(0.6);
+  REQUIRE(model.begin_drag({1, 1}));
+  const Point2 q = model.control_points(1)[1];
+  for (int i = 1; i <= 3; ++i) {
+    REQUIRE(model.drag_to({q[0] + 0.003 * i, q[1]}));
+    CHECK(model.last_solve_was_schur());
+  }
+  model.end_drag();
+  check_displayed_is_current(model);
+  check_grid_is_generated(model);
+  REQUIRE(model.undo());
+  model.wait_until_solved();
+  CHECK(model.spec() == spec);
+}
