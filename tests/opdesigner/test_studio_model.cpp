@@ -147,7 +147,10 @@ TEST_CASE("studio: a drag re-solves the displayed slice at once and the changed 
 }
 
 TEST_CASE("studio: dragging at an existing keyframe moves it; undo before the background ends", "[studio]") {
-  StudioModel model(small_spec("contact"), test_options());
+  StudioOptions o = test_options();
+  o.background_thread = GENERATE(true, false);  // false: queued slices wait for the undo
+  INFO("background thread " << o.background_thread);
+  StudioModel model(small_spec("contact"), o);
   model.wait_until_solved();
   const OperatorSpec original = model.spec();
   const std::vector<float> original_grid = model.grid().data();
@@ -371,7 +374,9 @@ TEST_CASE("studio: random edits keep the solved grid equal to generate(spec)", "
   for (unsigned seed = 1; seed <= 6; ++seed) {
     INFO("seed " << seed);
     std::mt19937 rng(seed);
-    StudioModel model(small_spec(seed % 2 ? "contact" : "bulge"), test_options());
+    StudioOptions o = test_options();
+    o.background_thread = seed <= 4;  // and without: every queued slice waits for undo/redo/wait
+    StudioModel model(small_spec(seed % 2 ? "contact" : "bulge"), o);
     model.wait_until_solved();
     const OperatorSpec first = model.spec();
     const std::vector<float> first_grid = model.grid().data();

@@ -115,7 +115,8 @@ StudioModel::Impl::Impl(OperatorSpec s, const StudioOptions& o) : options(o), sp
   solved.assign(static_cast<std::size_t>(spec.slices), 0);
   changed_at.assign(static_cast<std::size_t>(spec.slices), 0);
   pending = spec.slices;
-  background = std::make_unique<detail::BackgroundSolver>(spec, generator_options(options));
+  if (options.background_thread)
+    background = std::make_unique<detail::BackgroundSolver>(spec, generator_options(options));
   solve_now(0);
   post_pending();
 }
@@ -151,7 +152,7 @@ void StudioModel::Impl::post_pending() {
   std::stable_sort(todo.begin(), todo.end(),
                    [&](int a, int b) { return std::abs(a - slice) < std::abs(b - slice); });
   pending_total = int(todo.size());
-  if (!todo.empty()) background->post(generation, spec, std::move(todo));
+  if (background && !todo.empty()) background->post(generation, spec, std::move(todo));
 }
 
 // Makes `next` (validated) the spec: records the changed slices' old values in `step`, solves
@@ -199,6 +200,7 @@ void StudioModel::Impl::trim_history() {
 // Publishes background results still valid: the slice is unsolved and no edit changed it after
 // the result's job was posted.
 void StudioModel::Impl::poll() {
+  adopt_rebuilt(false);
   if (!background) return;
   for (auto& r : background->take()) {
     const auto k = static_cast<std::size_t>(r.slice);
@@ -208,16 +210,14 @@ void StudioModel::Impl::poll() {
     --pending;
   }
   background_error = background->error();
-  adopt_rebuilt(false);
 }
 
 void StudioModel::Impl::wait(const ProgressFn& progress) {
   for (poll(); pending > 0; poll()) {
     if (progress) progress(pending_total - pending, pending_total);
-    if (background->idle()) {  // the job failed or was dropped: finish here (throws on errors)
-      for (int k = 0; k < spec.slices; ++k)
-        if (!solved[static_cast<std::size_t>(k)]) solve_now(k);
-      break;
+    if (!background || background->idle()) {  // no thread, or its job failed: solve here (throws)
+      solve_now(int(std::find(solved.begin(), solved.end(), 0) - solved.begin()));
+      continue;
     }
     background->wait(std::chrono::milliseconds(20));
   }
@@ -234,7 +234,7 @@ void StudioModel::Impl::recentre_band() {
   rebuilt = std::async(std::launch::async, [s = spec, o] {
     return std::make_unique<operators::BiharmonicOperatorGenerator>(s, o);
   });
-  background->rebase(spec);
+  if (background) background->rebase(spec);
 }
 
 // Takes the rebuilt generator when it is ready (or waits for it with `block`), then starts the

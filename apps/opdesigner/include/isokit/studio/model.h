@@ -67,6 +67,10 @@ struct StudioOptions {
   /// 2 x 64 KiB each at 128²): the oldest steps are dropped beyond it, the last one always kept.
   /// Default 1024 MiB.
   double undo_memory_mib{1024};
+  /// Solve queued slices on a background thread. false: no thread; queued slices are solved on
+  /// the calling thread by wait_until_solved (and export, undo, redo) — deterministic, for tests
+  /// and scripts. Default true.
+  bool background_thread{true};
   /// Recent-files list: nullopt = default_recent_files_path(); "" = in memory only (tests).
   std::optional<std::string> recent_files_path;
   /// Recent files kept. Default 10.
