@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <random>
 
 #include "isokit/core/error.h"
@@ -463,4 +464,24 @@ TEST_CASE("studio: at the real resolution (128²) drags are Schur solves and the
   REQUIRE(model.undo());
   model.wait_until_solved();
   CHECK(model.spec() == spec);
+}
+
+TEST_CASE("studio: recent files are most recent first, bounded, and survive a broken file", "[studio]") {
+  const auto dir = temp_dir("recent");
+  const std::string path = (dir / "isokit" / "recent.json").string();
+  {
+    RecentFiles recent(path, 3);
+    for (const char* f : {"a.json", "b.json", "c.json", "a.json", "d.json"}) recent.add((dir / f).string());
+    CHECK(recent.last_error().empty());
+    REQUIRE(recent.files().size() == 3);
+    CHECK(std::filesystem::path(recent.files()[0]).filename() == "d.json");
+    CHECK(std::filesystem::path(recent.files()[1]).filename() == "a.json");
+    recent.remove(recent.files()[1]);
+  }
+  CHECK(RecentFiles(path, 3).files().size() == 2);
+  CHECK(RecentFiles(path, 1).files().size() == 1);
+  { std::ofstream(path) << "{ not json"; }
+  CHECK(RecentFiles(path).files().empty());
+  CHECK(RecentFiles("").files().empty());
+  std::filesystem::remove_all(dir);
 }
