@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <random>
 
 #include "isokit/core/error.h"
@@ -147,7 +148,10 @@ TEST_CASE("studio: a drag re-solves the displayed slice at once and the changed 
 }
 
 TEST_CASE("studio: dragging at an existing keyframe moves it; undo before the background ends", "[studio]") {
-  StudioModel model(small_spec("contact"), test_options());
+  StudioOptions o = test_options();
+  o.background_thread = GENERATE(true, false);  // false: queued slices wait for the undo
+  INFO("background thread " << o.background_thread);
+  StudioModel model(small_spec("contact"), o);
   model.wait_until_solved();
   const OperatorSpec original = model.spec();
   const std::vector<float> original_grid = model.grid().data();
@@ -257,6 +261,36 @@ TEST_CASE("studio: undo depth is bounded", "[studio]") {
   CHECK(model.undo());
   CHECK(!model.undo());
   CHECK(model.spec().controller_knots.size() == 3);  // the preset's two plus the first add
+  // By memory: two drags of ~30 changed slices (4 KiB each) do not fit in 0.1 MiB.
+  o.undo_depth = 100;
+  o.undo_memory_mib = 0.1;
+  StudioModel bounded(small_spec("contact"), o);
+  bounded.set_d(0.5);
+  for (double x : {0.7, 0.72}) {
+    REQUIRE(bounded.begin_drag({1, 1}));
+    REQUIRE(bounded.drag_to({x, 0.7}));
+    bounded.end_drag();
+  }
+  CHECK(bounded.undo());
+  CHECK(!bounded.undo());
+  o.undo_memory_mib = 0;
+  CHECK_THROWS_AS(StudioModel(small_spec("contact"), o), InputError);
+}
+
+TEST_CASE("studio: new document and rename", "[studio]") {
+  StudioModel model(small_spec("contact"), test_options());
+  REQUIRE(model.rename("mine"));
+  CHECK(model.spec().name == "mine");
+  CHECK(model.modified());
+  REQUIRE(model.undo());
+  CHECK(model.spec().name == small_spec("contact").name);
+  CHECK_THROWS_AS(model.new_document(OperatorSpec{}), InputError);  // no curves
+  CHECK(model.spec().curves.size() == 2);
+  model.new_document(small_spec("bulge"));
+  CHECK(model.spec() == small_spec("bulge"));
+  CHECK(model.document_path().empty());
+  CHECK(!model.can_undo());
+  check_grid_is_generated(model);
 }
 
 TEST_CASE("studio: save, open, export and recent files", "[studio]") {
@@ -294,34 +328,76 @@ TEST_CASE("studio: save, open, export and recent files", "[studio]") {
   std::filesystem::remove_all(dir);
 }
 
+namespace {
+
+// One random edit at a random slice: a drag of a few moves, a point added or deleted, a
+// keyframe, a knot, an undo or a redo (some are refused; the invariants hold either way).
+void random_edit(StudioModel& model, std::mt19937& rng) {
+  std::uniform_real_distribution<double> u(-0.04, 0.04);
+  model.set_slice(int(rng() % unsigned(model.spec().slices)));
+  const auto& curves = model.spec().curves;
+  const int c = int(rng() % curves.size());
+  const int n = int(curves[std::size_t(c)].keyframes[0].points.size());
+  switch (rng() % 8) {
+    case 0:
+    case 1: {
+      const CurvePoint p{c, int(rng() % unsigned(n))};
+      const Point2 q = model.control_points(c)[std::size_t(p.point)];
+      REQUIRE(model.begin_drag(p));
+      for (int m = 1; m <= 3; ++m) model.drag_to({q[0] + m * u(rng), q[1] + m * u(rng)});
+      model.end_drag();
+      break;
+    }
+    case 2:
+      model.add_point(c, int(rng() % unsigned(n - 1)), 0.3);
+      break;
+    case 3:
+      model.delete_point({c, int(rng() % unsigned(n))});
+      break;
+    case 4:
+      model.add_keyframe(c);
+      break;
+    case 5:
+      model.add_knot(0.2 + 2.7 * std::abs(u(rng)) / 0.04, 0.5);
+      break;
+    case 6:
+      model.undo();
+      break;
+    default:
+      model.redo();
+      break;
+  }
+}
+
+}  // namespace
+
 TEST_CASE("studio: random edits keep the solved grid equal to generate(spec)", "[studio]") {
-  for (unsigned seed = 1; seed <= 3; ++seed) {
+  for (unsigned seed = 1; seed <= 6; ++seed) {
     INFO("seed " << seed);
     std::mt19937 rng(seed);
-    std::uniform_real_distribution<double> u(-0.04, 0.04);
-    StudioModel model(small_spec(seed % 2 ? "contact" : "bulge"), test_options());
-    for (int step = 0; step < 6; ++step) {
-      model.set_slice(int(rng() % 32));
-      const int action = int(rng() % 5);
-      const auto& curves = model.spec().curves;
-      const int c = int(rng() % curves.size());
-      const int n = int(curves[std::size_t(c)].keyframes[0].points.size());
-      if (action <= 1) {  // a drag of a few moves (some may be refused)
-        const CurvePoint p{c, int(rng() % n)};
-        const Point2 q = model.control_points(c)[std::size_t(p.point)];
-        REQUIRE(model.begin_drag(p));
-        for (int m = 1; m <= 3; ++m) model.drag_to({q[0] + m * u(rng), q[1] + m * u(rng)});
-        model.end_drag();
-      } else if (action == 2) {
-        model.add_point(c, int(rng() % (n - 1)), 0.3);
-      } else if (action == 3) {
-        model.undo();
-      } else {
-        model.redo();
-      }
+    StudioOptions o = test_options();
+    o.background_thread = seed <= 4;  // and without: every queued slice waits for undo/redo/wait
+    StudioModel model(small_spec(seed % 2 ? "contact" : "bulge"), o);
+    model.wait_until_solved();
+    const OperatorSpec first = model.spec();
+    const std::vector<float> first_grid = model.grid().data();
+    for (int step = 0; step < 8; ++step) {
+      random_edit(model, rng);
       check_displayed_is_current(model);
     }
     check_grid_is_generated(model);
+    // Undo everything, then redo everything: both ends bit for bit.
+    const OperatorSpec last = model.spec();
+    const std::vector<float> last_grid = model.grid().data();
+    int steps = 0;
+    while (model.undo()) ++steps;
+    model.wait_until_solved();
+    CHECK(model.spec() == first);
+    CHECK(model.grid().data() == first_grid);
+    for (int i = 0; i < steps; ++i) REQUIRE(model.redo());
+    model.wait_until_solved();
+    CHECK(model.spec() == last);
+    CHECK(model.grid().data() == last_grid);
   }
 }
 
@@ -345,4 +421,67 @@ TEST_CASE("studio: live checks of the displayed slice mark where the iso-line le
   CHECK(bad.failure->slice == model.slice());
   CHECK(!bad.stray_crossings.empty());
   for (const Point2& p : bad.stray_crossings) CHECK(p[0] < 0.3);  // between the axis and the profile
+}
+
+TEST_CASE("studio: a drag out of the edit band re-centres the band on the new profile", "[studio]") {
+  StudioModel model(small_spec("contact"), test_options());
+  model.set_d(1.0);
+  REQUIRE(model.begin_drag({1, 1}));
+  REQUIRE(model.drag_to({0.15, 0.9}));  // far from every slice's contact line: > 3 cells
+  CHECK(!model.last_solve_was_schur());
+  check_displayed_is_current(model);
+  model.end_drag();
+  CHECK(model.recentring());
+  check_grid_is_generated(model);
+  CHECK(!model.recentring());
+  REQUIRE(model.begin_drag({1, 1}));
+  REQUIRE(model.drag_to({0.16, 0.9}));
+  CHECK(model.last_solve_was_schur());
+  model.end_drag();
+  check_displayed_is_current(model);
+  check_grid_is_generated(model);
+  REQUIRE(model.undo());
+  REQUIRE(model.undo());
+  CHECK(model.spec() == small_spec("contact"));
+  check_grid_is_generated(model);
+}
+
+TEST_CASE("studio: at the real resolution (128²) drags are Schur solves and the grid is generated",
+          "[studio][slow]") {
+  OperatorSpec spec = preset_spec("bulge", 128);
+  spec.slices = 16;
+  StudioModel model(spec, test_options());
+  model.set_d(0.6);
+  REQUIRE(model.begin_drag({1, 1}));
+  const Point2 q = model.control_points(1)[1];
+  for (int i = 1; i <= 3; ++i) {
+    REQUIRE(model.drag_to({q[0] + 0.003 * i, q[1]}));
+    CHECK(model.last_solve_was_schur());
+  }
+  model.end_drag();
+  check_displayed_is_current(model);
+  check_grid_is_generated(model);
+  REQUIRE(model.undo());
+  model.wait_until_solved();
+  CHECK(model.spec() == spec);
+}
+
+TEST_CASE("studio: recent files are most recent first, bounded, and survive a broken file", "[studio]") {
+  const auto dir = temp_dir("recent");
+  const std::string path = (dir / "isokit" / "recent.json").string();
+  {
+    RecentFiles recent(path, 3);
+    for (const char* f : {"a.json", "b.json", "c.json", "a.json", "d.json"}) recent.add((dir / f).string());
+    CHECK(recent.last_error().empty());
+    REQUIRE(recent.files().size() == 3);
+    CHECK(std::filesystem::path(recent.files()[0]).filename() == "d.json");
+    CHECK(std::filesystem::path(recent.files()[1]).filename() == "a.json");
+    recent.remove(recent.files()[1]);
+  }
+  CHECK(RecentFiles(path, 3).files().size() == 2);
+  CHECK(RecentFiles(path, 1).files().size() == 1);
+  { std::ofstream(path) << "{ not json"; }
+  CHECK(RecentFiles(path).files().empty());
+  CHECK(RecentFiles("").files().empty());
+  std::filesystem::remove_all(dir);
 }

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstring>
 #include <deque>
+#include <future>
 #include <limits>
 #include <map>
 #include <utility>
@@ -67,6 +68,10 @@ struct StudioModel::Impl {
   int slice{0};
   std::optional<CurvePoint> selection;
   std::unique_ptr<operators::BiharmonicOperatorGenerator> generator;  // GUI thread's
+  // Edit band re-centring: a generator being built around a newer profile, and whether a solve
+  // left the band since the last rebuild started.
+  std::future<std::unique_ptr<operators::BiharmonicOperatorGenerator>> rebuilt;
+  bool left_band{false};
   std::unique_ptr<detail::BackgroundSolver> background;
   double last_ms{0};
   bool last_schur{false};
@@ -90,14 +95,18 @@ struct StudioModel::Impl {
   void post_pending();
   void apply(OperatorSpec next, Step& step);
   void push(Step step);
+  void trim_history();
   void poll();
   void wait(const ProgressFn& progress);
   void swap_slices(Step& step, bool to_before);
+  void recentre_band();
+  void adopt_rebuilt(bool block);
   LiveCheck compute_check();
 };
 
 StudioModel::Impl::Impl(OperatorSpec s, const StudioOptions& o) : options(o), spec(std::move(s)) {
   require(options.undo_depth >= 1, "undo_depth", "must be at least 1", "keep one undo step or more");
+  require(options.undo_memory_mib > 0, "undo_memory_mib", "must be positive", "give the memory in MiB");
   operators::validate(spec, "studio");
   generator = std::make_unique<operators::BiharmonicOperatorGenerator>(spec, generator_options(options));
   grid = GridOperator(
@@ -106,7 +115,8 @@ StudioModel::Impl::Impl(OperatorSpec s, const StudioOptions& o) : options(o), sp
   solved.assign(static_cast<std::size_t>(spec.slices), 0);
   changed_at.assign(static_cast<std::size_t>(spec.slices), 0);
   pending = spec.slices;
-  background = std::make_unique<detail::BackgroundSolver>(spec, generator_options(options));
+  if (options.background_thread)
+    background = std::make_unique<detail::BackgroundSolver>(spec, generator_options(options));
   solve_now(0);
   post_pending();
 }
@@ -117,6 +127,7 @@ void StudioModel::Impl::solve_now(int k) {
   const std::vector<float> v = generator->solve_edited(slice_d(k), spec);
   last_ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
   last_schur = generator->last_edit_was_schur();
+  left_band |= !last_schur;
   std::memcpy(values(k), v.data(), v.size() * sizeof(float));
   if (!solved[static_cast<std::size_t>(k)]) --pending;
   solved[static_cast<std::size_t>(k)] = 1;
@@ -141,7 +152,7 @@ void StudioModel::Impl::post_pending() {
   std::stable_sort(todo.begin(), todo.end(),
                    [&](int a, int b) { return std::abs(a - slice) < std::abs(b - slice); });
   pending_total = int(todo.size());
-  if (!todo.empty()) background->post(generation, spec, std::move(todo));
+  if (background && !todo.empty()) background->post(generation, spec, std::move(todo));
 }
 
 // Makes `next` (validated) the spec: records the changed slices' old values in `step`, solves
@@ -164,13 +175,32 @@ void StudioModel::Impl::apply(OperatorSpec next, Step& step) {
 
 void StudioModel::Impl::push(Step step) {
   undo.push_back(std::move(step));
-  while (int(undo.size()) > options.undo_depth) undo.pop_front();
   redo.clear();
+  trim_history();
+}
+
+// Drops the oldest undo steps beyond undo_depth or undo_memory_mib (keeping the newest).
+void StudioModel::Impl::trim_history() {
+  auto bytes = [](const Step& step) {
+    double total = 0;
+    for (const auto& entry : step.slices)
+      total += double(entry.second.before.size() + entry.second.after.size()) * sizeof(float);
+    return total;
+  };
+  double total = 0;
+  for (const Step& step : undo) total += bytes(step);
+  for (const Step& step : redo) total += bytes(step);
+  const double limit = options.undo_memory_mib * 1024.0 * 1024.0;
+  while (undo.size() > 1 && (int(undo.size()) > options.undo_depth || total > limit)) {
+    total -= bytes(undo.front());
+    undo.pop_front();
+  }
 }
 
 // Publishes background results still valid: the slice is unsolved and no edit changed it after
 // the result's job was posted.
 void StudioModel::Impl::poll() {
+  adopt_rebuilt(false);
   if (!background) return;
   for (auto& r : background->take()) {
     const auto k = static_cast<std::size_t>(r.slice);
@@ -185,14 +215,35 @@ void StudioModel::Impl::poll() {
 void StudioModel::Impl::wait(const ProgressFn& progress) {
   for (poll(); pending > 0; poll()) {
     if (progress) progress(pending_total - pending, pending_total);
-    if (background->idle()) {  // the job failed or was dropped: finish here (throws on errors)
-      for (int k = 0; k < spec.slices; ++k)
-        if (!solved[static_cast<std::size_t>(k)]) solve_now(k);
-      break;
+    if (!background || background->idle()) {  // no thread, or its job failed: solve here (throws)
+      solve_now(int(std::find(solved.begin(), solved.end(), 0) - solved.begin()));
+      continue;
     }
     background->wait(std::chrono::milliseconds(20));
   }
   if (progress) progress(pending_total, pending_total);
+}
+
+// After an edit step: when a solve of the step left the edit band, builds generators around the
+// current profile (GUI one on another thread, adopted by poll(); the background's before its
+// next slice), so the next drags near it are Schur solves again (docs/performance.md).
+void StudioModel::Impl::recentre_band() {
+  if (!left_band || rebuilt.valid()) return;
+  left_band = false;
+  const operators::BiharmonicOptions o = generator_options(options);
+  rebuilt = std::async(std::launch::async, [s = spec, o] {
+    return std::make_unique<operators::BiharmonicOperatorGenerator>(s, o);
+  });
+  if (background) background->rebase(spec);
+}
+
+// Takes the rebuilt generator when it is ready (or waits for it with `block`), then starts the
+// next rebuild if a solve left the band meanwhile.
+void StudioModel::Impl::adopt_rebuilt(bool block) {
+  if (!rebuilt.valid()) return;
+  if (!block && rebuilt.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return;
+  generator = rebuilt.get();
+  recentre_band();
 }
 
 // Undo (`to_before`) or redo of `step` on a fully solved grid: exchanges the slices' values.
@@ -250,12 +301,16 @@ StudioModel::StudioModel(OperatorSpec spec, StudioOptions options)
 
 StudioModel::~StudioModel() = default;
 
-void StudioModel::open(const std::string& path) {
-  OperatorSpec spec = operators::load_spec(path);
+void StudioModel::new_document(OperatorSpec spec) {
   auto fresh = std::make_unique<Impl>(std::move(spec), impl_->options);
   impl_ = std::move(fresh);
-  document_path_ = path;
+  document_path_.clear();
   saved_spec_ = impl_->spec;
+}
+
+void StudioModel::open(const std::string& path) {
+  new_document(operators::load_spec(path));
+  document_path_ = path;
   recent_.add(path);
 }
 
@@ -384,6 +439,7 @@ EditResult StudioModel::commit(const std::function<OperatorSpec(const OperatorSp
   impl_->apply(std::move(next), step);
   step.after = impl_->spec;
   impl_->push(std::move(step));
+  impl_->recentre_band();
   select(impl_->selection);
   return {};
 }
@@ -428,6 +484,7 @@ void StudioModel::end_drag() {
   if (!m.moved) return;
   m.drag_step.after = m.spec;
   m.push(std::move(m.drag_step));
+  m.recentre_band();
 }
 
 bool StudioModel::dragging() const {
@@ -466,6 +523,14 @@ EditResult StudioModel::delete_knot(int i) {
   return commit([&](const OperatorSpec& s) { return detail::remove_knot(s, i); });
 }
 
+EditResult StudioModel::rename(const std::string& name) {
+  return commit([&](const OperatorSpec& s) {
+    OperatorSpec next = s;
+    next.name = name;
+    return next;
+  });
+}
+
 EditResult StudioModel::add_curve(CurveKind kind, CurveType type, std::vector<Point2> points) {
   return commit([&](const OperatorSpec& s) { return detail::append_curve(s, kind, type, points); });
 }
@@ -491,7 +556,9 @@ bool StudioModel::undo(const ProgressFn& progress) {
   Step step = std::move(m.undo.back());
   m.undo.pop_back();
   m.swap_slices(step, true);
+  m.recentre_band();
   m.redo.push_back(std::move(step));
+  m.trim_history();
   select(m.selection);
   return true;
 }
@@ -504,6 +571,7 @@ bool StudioModel::redo(const ProgressFn& progress) {
   Step step = std::move(m.redo.back());
   m.redo.pop_back();
   m.swap_slices(step, false);
+  m.recentre_band();
   m.undo.push_back(std::move(step));
   select(m.selection);
   return true;
@@ -525,6 +593,10 @@ bool StudioModel::fully_solved() const {
 }
 void StudioModel::wait_until_solved(const ProgressFn& progress) {
   impl_->wait(progress);
+  impl_->adopt_rebuilt(true);
+}
+bool StudioModel::recentring() const {
+  return impl_->rebuilt.valid();
 }
 const std::string& StudioModel::background_error() const {
   return impl_->background_error;

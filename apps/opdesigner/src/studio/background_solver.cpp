@@ -27,6 +27,11 @@ void BackgroundSolver::post(long generation, const operators::OperatorSpec& spec
   wake_.notify_all();
 }
 
+void BackgroundSolver::rebase(const operators::OperatorSpec& spec) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  next_base_ = std::make_shared<const operators::OperatorSpec>(spec);
+}
+
 std::vector<BackgroundSolver::Result> BackgroundSolver::take() {
   std::lock_guard<std::mutex> lock(mutex_);
   return std::exchange(outbox_, {});
@@ -71,12 +76,15 @@ void BackgroundSolver::run() {
 bool BackgroundSolver::solve_job(const Job& job) {
   const int nd = job.spec->slices;
   for (const int k : job.slices) {
+    std::shared_ptr<const operators::OperatorSpec> rebase;
     {
       std::lock_guard<std::mutex> lock(mutex_);
       if (stop_ || has_job_) return true;
+      rebase = std::exchange(next_base_, nullptr);
     }
     Result r{job.generation, k, {}};
     try {
+      if (rebase) generator_ = std::make_unique<operators::BiharmonicOperatorGenerator>(*rebase, options_);
       if (!generator_) generator_ = std::make_unique<operators::BiharmonicOperatorGenerator>(base_, options_);
       r.values = generator_->solve_edited(nd == 1 ? 0.0 : double(k) / (nd - 1), *job.spec);
     } catch (const std::exception& e) {

@@ -35,6 +35,9 @@ class BackgroundSolver {
 
   /// Replaces the job: solve `slices` (in this order) of `spec`, tagging results `generation`.
   void post(long generation, const operators::OperatorSpec& spec, std::vector<int> slices);
+  /// Rebuilds the generator around `spec` before the next slice (its edit band follows the
+  /// edited profile; see StudioModel).
+  void rebase(const operators::OperatorSpec& spec);
   /// The results finished since the last call.
   std::vector<Result> take();
   /// Blocks until a result is ready, the job is done, or `timeout` passes.
@@ -54,6 +57,7 @@ class BackgroundSolver {
   bool solve_job(const Job& job);
 
   operators::OperatorSpec base_;
+  std::shared_ptr<const operators::OperatorSpec> next_base_;  // set by rebase(), guarded
   operators::BiharmonicOptions options_;
   std::unique_ptr<operators::BiharmonicOperatorGenerator> generator_;  // worker thread only
   std::mutex mutex_;

@@ -18,6 +18,11 @@
 /// rounding (≤ 1e-5). Save of the spec does not need the grid; export, undo and redo wait for
 /// the background first.
 ///
+/// Edit band: the generators precompute a band of `edit_band_cells` around the profile they
+/// were built for; a slice whose edited profile leaves it costs a numeric factorisation (~10x
+/// slower). When an edit step (a whole drag) left the band, both generators are rebuilt around
+/// the edited profile in the background (seconds at 128², `recentring()`), then adopted.
+///
 /// Keyframes: control points are keyframed over d and interpolated linearly (ProfileCurve).
 /// Point edits act at the displayed d: on the keyframe at that slice's d when one lies within
 /// half a slice, else on a new keyframe inserted at the slice's d (with the interpolated points)
@@ -30,85 +35,15 @@
 /// stays at its last valid position).
 #pragma once
 
-#include <functional>
 #include <memory>
-#include <optional>
 #include <string>
 #include <vector>
 
-#include "isokit/operators/biharmonic.h"
-#include "isokit/operators/checks.h"
 #include "isokit/operators/grid_operator.h"
-#include "isokit/operators/spec.h"
 #include "isokit/studio/recent_files.h"
+#include "isokit/studio/types.h"
 
 namespace isokit::studio {
-
-using operators::ControllerKnot;
-using operators::CurveKind;
-using operators::CurveType;
-using operators::OperatorSpec;
-using operators::Point2;
-
-struct StudioOptions {
-  /// Edit band of the generators, in cells (BiharmonicOptions::edit_band_cells): drags that stay
-  /// this close to the opened profile are re-solved with the Schur scheme. Default 3.
-  int edit_band_cells{3};
-  /// Sparse backend of the generators. Default kAuto.
-  operators::SparseBackend backend{operators::SparseBackend::kAuto};
-  /// Undo steps kept (oldest dropped first), ≥ 1. Default 100.
-  int undo_depth{100};
-  /// Recent-files list: nullopt = default_recent_files_path(); "" = in memory only (tests).
-  std::optional<std::string> recent_files_path;
-  /// Recent files kept. Default 10.
-  int recent_capacity{10};
-};
-
-/// A control point: curve index into spec().curves and point index within that curve.
-struct CurvePoint {
-  int curve{-1};
-  int point{-1};
-  bool operator==(const CurvePoint& o) const { return curve == o.curve && point == o.point; }
-};
-
-/// A point on a curve's control polygon at the displayed d: between points `segment` and
-/// `segment + 1` at parameter `t` ∈ [0, 1].
-struct SegmentPick {
-  int curve{-1};
-  int segment{-1};
-  double t{0};
-  Point2 at{};
-};
-
-/// What an edit did: ok, or refused with the reason (validate's message, or why the edit does
-/// not apply). A refused edit changes nothing.
-struct EditResult {
-  bool ok{true};
-  std::string message;
-  explicit operator bool() const { return ok; }
-};
-
-/// Background re-solve: `done` of `total` slices since the last edit (0/0 when idle).
-struct SolveProgress {
-  int done{0};
-  int total{0};
-};
-
-/// Checks of the displayed slice (operators::inspect_slice / judge_slice) and where they fail.
-struct LiveCheck {
-  operators::SliceReport report;
-  std::optional<operators::CheckFailure> failure;
-  /// 0.5 crossings (on grid edges) more than one cell from the profile: stray iso-lines.
-  std::vector<Point2> stray_crossings;
-  /// Boundary-profile samples more than one cell from every 0.5 crossing: the profile the
-  /// operator does not reproduce.
-  std::vector<Point2> unmatched_profile;
-  /// False while the displayed slice is not solved for the current spec (never after an edit).
-  bool current{true};
-};
-
-/// (done, total) slices; called on the calling (GUI) thread while waiting.
-using ProgressFn = std::function<void(int done, int total)>;
 
 class StudioModel {
  public:
@@ -123,6 +58,9 @@ class StudioModel {
   /// Replaces the document by the spec at `path` (history cleared, slice 0 displayed) and adds it
   /// to the recent files. \throw isokit::InputError (load_spec's message); the model is unchanged.
   void open(const std::string& path);
+  /// Replaces the document by `spec` (e.g. a preset: "New"), with no document path and an empty
+  /// history. \throw isokit::InputError for an invalid spec; the model is unchanged.
+  void new_document(OperatorSpec spec);
   /// Writes the spec atomically (operators::save_spec), makes `path` the document path and adds
   /// it to the recent files. \throw isokit::InputError naming the file.
   void save_spec(const std::string& path);
@@ -144,7 +82,8 @@ class StudioModel {
   /// The displayed slice and its d (`k / (slices - 1)`).
   int slice() const;
   double d() const;
-  /// Shows slice `k` (clamped to the grid); solves it now if it is still queued.
+  /// Shows slice `k` (clamped to the grid); solves it now if it is still queued. Ends a drag in
+  /// progress (edits act at the displayed d).
   void set_slice(int k);
   /// Shows the slice nearest to `d` (clamped to [0, 1]).
   void set_d(double d);
@@ -197,6 +136,8 @@ class StudioModel {
   EditResult add_knot(double alpha, double d);
   EditResult move_knot(int i, double alpha, double d);
   EditResult delete_knot(int i);
+  /// Renames the operator (spec().name). The grid does not change.
+  EditResult rename(const std::string& name);
   /// Appends a curve with one keyframe (the same points for every d).
   EditResult add_curve(CurveKind kind, CurveType type, std::vector<Point2> points);
   /// Removes curve `c` (refused when it is the last boundary curve).
@@ -215,8 +156,12 @@ class StudioModel {
   SolveProgress progress() const;
   /// True when every slice is solved for the current spec (as of the last poll()).
   bool fully_solved() const;
-  /// Polls until fully_solved(), calling `progress` between slices.
+  /// Polls until fully_solved(), calling `progress` between slices, then waits for a generator
+  /// being rebuilt (recentring()). Export, undo and redo wait for the slices only.
   void wait_until_solved(const ProgressFn& progress = {});
+  /// True while a generator is being rebuilt around the edited profile (see the file comment);
+  /// poll() adopts it, wait_until_solved() waits for it.
+  bool recentring() const;
   /// The last background failure ("" if none); its slices stay queued.
   const std::string& background_error() const;
 
