@@ -132,6 +132,10 @@ int main(int argc, char** argv) {
         }
     expect(failed["check_marks_px"].size() > 0 && marked > 10,
            "the offending region is marked in red (" + std::to_string(marked) + " red pixels at the marks)");
+    const json &k0 = named(marks, "check")["knots"], &k1 = named(marks, "knot")["knots"];
+    expect(k0.size() == k1.size() && k1.size() >= 3 && dist(k1[1], json{1.2, 0.3}) < 0.02 &&
+               dist(k0[1], k1[1]) > 0.1,
+           "the controller knot 1 was dragged to (1.2, 0.3): " + k0[1].dump() + " -> " + k1[1].dump());
     const json& lat = r["timing"]["latency_frames"];
     expect(lat["count"].get<int>() > 0 && lat["max"].get<int>() <= 2,
            "input to redrawn slice within 2 frames (max " + lat["max"].dump() + ")");

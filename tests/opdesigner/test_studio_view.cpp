@@ -97,9 +97,11 @@ TEST_CASE("scripts: every event parses; errors name the event and the field", "[
     {"type": "move", "to": {"point": [1, 2]}}, {"type": "move", "to": {"knot": 2}},
     {"type": "press"}, {"type": "release", "button": 1}, {"type": "key", "key": "Z", "ctrl": true},
     {"type": "wait_solved"}, {"type": "screenshot", "name": "a"}, {"type": "set", "d": 0.5, "angle": 90},
-    {"type": "mark", "name": "m"}])",
+    {"type": "mark", "name": "m"}, {"type": "move", "to": {"ctrl": [1.5, 0.25]}}])",
                                "t");
-  REQUIRE(ev.size() == 11);
+  REQUIRE(ev.size() == 12);
+  CHECK(ev[11].target.kind == TargetKind::kController);
+  CHECK(ev[11].target.at[1] == Approx(0.25));
   CHECK(ev[1].kind == EventKind::kMove);
   CHECK(ev[1].target.kind == TargetKind::kOperator);
   CHECK(ev[1].frames == 5);

@@ -149,10 +149,12 @@ void Panels::run_pending_actions() {
 
 void Panels::draw_operator_plot(FrameStats& stats) {
   const ImVec2 avail = ImGui::GetContentRegionAvail();
-  const float size = std::max(64.f, std::min(avail.x, avail.y) - 8.f);
-  const ImVec2 origin = ImGui::GetCursorScreenPos();
+  const float size = std::max(64.f, std::min(avail.x, avail.y) - 8.f - 2 * kPlotPad);
+  const ImVec2 corner = ImGui::GetCursorScreenPos();
+  const ImVec2 origin(corner.x + kPlotPad, corner.y + kPlotPad);
   layout_.op = PlotMapping{origin.x, origin.y, size, size, 0, 0, 1, 1};
-  ImGui::InvisibleButton("operator", ImVec2(size, size),
+  // The button reaches kPlotPad beyond the plot, so handles on its edges can be grabbed.
+  ImGui::InvisibleButton("operator", ImVec2(size + 2 * kPlotPad, size + 2 * kPlotPad),
                          ImGuiButtonFlags_MouseButtonLeft | ImGuiButtonFlags_MouseButtonRight);
   handle_operator_input(stats);
   ImDrawList* dl = ImGui::GetWindowDrawList();

@@ -39,6 +39,8 @@ plot::Point2 ScriptPlayer::resolve(const ScriptTarget& t, const Layout& layout, 
       return t.at;
     case TargetKind::kOperator:
       return layout.op.to_screen(t.at);
+    case TargetKind::kController:
+      return layout.controller.to_screen(t.at);
     case TargetKind::kPreview:
       return layout.preview.to_screen(t.at);
     case TargetKind::kControlPoint: {

@@ -26,14 +26,17 @@ plot::Point2 pair_of(const json& j, const Context& c, const std::string& field) 
 
 ScriptTarget target_of(const json& j, const Context& c) {
   require(j.is_object() && j.size() == 1, c.where(), "'to' must be an object with one key",
-          "use {\"px\": [x, y]}, {\"op\": [f1, f2]}, {\"point\": [curve, index]}, {\"knot\": i} or "
-          "{\"preview\": [x, y]}");
+          "use {\"px\": [x, y]}, {\"op\": [f1, f2]}, {\"point\": [curve, index]}, {\"knot\": i}, "
+          "{\"ctrl\": [alpha, d]} or {\"preview\": [x, y]}");
   ScriptTarget t;
   const auto it = j.begin();
   const std::string key = it.key();
   const json& value = it.value();
-  if (key == "px" || key == "op" || key == "preview") {
-    t.kind = key == "px" ? TargetKind::kPixel : (key == "op" ? TargetKind::kOperator : TargetKind::kPreview);
+  if (key == "px" || key == "op" || key == "ctrl" || key == "preview") {
+    t.kind = key == "px"     ? TargetKind::kPixel
+             : key == "op"   ? TargetKind::kOperator
+             : key == "ctrl" ? TargetKind::kController
+                             : TargetKind::kPreview;
     t.at = pair_of(value, c, key);
   } else if (key == "point") {
     const plot::Point2 p = pair_of(value, c, key);
@@ -45,7 +48,7 @@ ScriptTarget target_of(const json& j, const Context& c) {
     t.kind = TargetKind::kKnot;
     t.index = value.get<int>();
   } else {
-    require(false, c.where(), "unknown target '" + key + "'", "use px, op, point, knot or preview");
+    require(false, c.where(), "unknown target '" + key + "'", "use px, op, point, knot, ctrl or preview");
   }
   return t;
 }

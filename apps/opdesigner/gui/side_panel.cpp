@@ -113,7 +113,8 @@ void Panels::draw_controller_plot() {
   ImGui::Text("controller d(alpha): drag knots, click to add, right-click to delete");
   const float w = ImGui::GetContentRegionAvail().x, h = 130.f;
   const ImVec2 o = ImGui::GetCursorScreenPos();
-  layout_.controller = PlotMapping{o.x, o.y, w, h, 0, 0, kPi, 1};
+  layout_.controller =
+      PlotMapping{o.x + kPlotPad, o.y + kPlotPad, w - 2 * kPlotPad, h - 2 * kPlotPad, 0, 0, kPi, 1};
   const PlotMapping& m = layout_.controller;
   ImGui::InvisibleButton("controller", ImVec2(w, h),
                          ImGuiButtonFlags_MouseButtonLeft | ImGuiButtonFlags_MouseButtonRight);

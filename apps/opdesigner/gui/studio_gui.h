@@ -23,6 +23,8 @@ namespace isokit::studio::gui {
 // Colours of the drawn items (RGBA); the gui test looks for the handle colour on screenshots.
 constexpr std::uint8_t kHandleRgb[3] = {255, 40, 200};
 constexpr std::uint8_t kSelectedRgb[3] = {255, 150, 0};
+/// Margin in pixels between an editable plot and its input area (handles on the plot's edges).
+constexpr float kPlotPad = 10.f;
 constexpr std::uint8_t kCheckRgb[3] = {255, 30, 30};  // marks of a failed check
 
 /// Where the plots are on screen (set while drawing, read by the script player).

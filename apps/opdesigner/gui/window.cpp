@@ -50,8 +50,9 @@ std::unique_ptr<StudioModel> open_model(const GuiOptions& o) {
   StudioOptions so;
   if (o.recent_files != "default") so.recent_files_path = o.recent_files;
   if (!o.spec_path.empty() && o.resolution <= 0) {
-    // open() records the document path and the recent file; start from the smallest valid spec.
-    auto model = std::make_unique<StudioModel>(operators::preset_spec("clean-union", 8), so);
+    // open() records the document path and the recent file; start from a small spec (at 8 the
+    // edit band covers the whole grid and the banded generator's setup fails in CHOLMOD).
+    auto model = std::make_unique<StudioModel>(operators::preset_spec("clean-union", 32), so);
     model->open(o.spec_path);
     return model;
   }
@@ -91,6 +92,8 @@ json snapshot(StudioModel& model, const gui::Layout& layout, int frame) {
     }
   }
   const LiveCheck& check = model.live_check();
+  json knots = json::array();
+  for (const auto& k : model.controller_knots()) knots.push_back({k.alpha, k.d});
   json marks = json::array();
   for (const auto* set : {&check.stray_crossings, &check.unmatched_profile})
     for (const auto& q : *set) {
@@ -107,6 +110,7 @@ json snapshot(StudioModel& model, const gui::Layout& layout, int frame) {
           {"points", points},
           {"check", check.failure ? json(check.failure->message()) : json(nullptr)},
           {"check_marks_px", marks},
+          {"knots", knots},
           {"plot", {layout.op.left, layout.op.top, layout.op.width, layout.op.height}}};
 }
 

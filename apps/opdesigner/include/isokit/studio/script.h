@@ -7,7 +7,8 @@
 ///   (one per frame; default 1), the button state unchanged (a drag when pressed). Targets:
 ///   `{"px": [x, y]}` window pixels, `{"op": [f1, f2]}` a point of the operator plot,
 ///   `{"point": [curve, index]}` a control point at the displayed d (where the model has it),
-///   `{"knot": i}` a controller knot, `{"preview": [x, y]}` a point of the composition preview.
+///   `{"knot": i}` a controller knot, `{"ctrl": [alpha, d]}` a point of the controller plot
+///   (radians), `{"preview": [x, y]}` a point of the composition preview.
 /// - `{"type": "press"}` / `{"type": "release"}`: left mouse button (`"button": 1` right).
 /// - `{"type": "key", "key": "Z", "ctrl": true, "shift": false}`: a key press and release.
 /// - `{"type": "frames", "n": N}`: render N frames without input.
@@ -26,11 +27,11 @@
 
 namespace isokit::studio {
 
-enum class TargetKind { kPixel, kOperator, kControlPoint, kKnot, kPreview };
+enum class TargetKind { kPixel, kOperator, kControlPoint, kKnot, kController, kPreview };
 
 struct ScriptTarget {
   TargetKind kind{TargetKind::kPixel};
-  plot::Point2 at{};  ///< kPixel, kOperator, kPreview
+  plot::Point2 at{};  ///< kPixel, kOperator, kController, kPreview
   int curve{0};       ///< kControlPoint
   int index{0};       ///< kControlPoint: point; kKnot: knot
 };
