@@ -57,11 +57,11 @@ struct LoadOptions {
   /// which need coverage feedback from the loader). glTF is always read in process (tinygltf,
   /// fuzzed and fixed in isokit). Where fork() is unavailable the read is in process.
   bool isolate_importer{true};
-  /// Wall-clock limit of that child process in seconds, > 0. Default 600 (the largest rig of
-  /// docs/skinning-real-rigs.md loads in under 1 s).
+  /// Wall-clock limit of that child process in seconds, > 0. Default 600 (the FBX rigs of
+  /// docs/skinning-real-rigs.md load in about a second).
   double importer_timeout_seconds{600};
   /// Address-space limit of that child process in MiB; 0 = none. Default 8192 (the real rigs
-  /// load in under 200 MiB; a malformed COLLADA file grows past 4 GiB within a minute).
+  /// load in tens of MiB; a malformed COLLADA file grows past 4 GiB within a minute).
   std::size_t importer_memory_mib{8192};
 };
 
