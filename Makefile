@@ -5,6 +5,7 @@ ASAN_BUILD ?= build-asan
 FUZZ_BUILD ?= build-fuzz
 FUZZ_SECONDS ?= 300
 FUZZ_TARGETS ?= glb gltf fbx dae setup spec npy
+FUZZ_ISOLATE ?= 0
 DEMO_OUT   ?= out/demo
 EVAL_OUT   ?= out/eval
 EVAL_ARGS  ?=
@@ -84,7 +85,7 @@ fuzz: deps
 	  -DISOKIT_APPS=ON -DISOKIT_CUDA=OFF -DISOKIT_BENCH=OFF -DISOKIT_TESTS=OFF -DISOKIT_WERROR=OFF $(CMAKE_ARGS)
 	cmake --build $(FUZZ_BUILD) -j $(JOBS) --target isokit_fuzz_all
 	rm -rf $(FUZZ_BUILD)/seeds && $(FUZZ_BUILD)/fuzz/isokit_fuzz_seeds $(FUZZ_BUILD)/seeds
-	scripts/run-fuzz.sh $(FUZZ_BUILD) $(FUZZ_SECONDS) $(FUZZ_TARGETS)
+	ISOKIT_FUZZ_ISOLATE=$(FUZZ_ISOLATE) scripts/run-fuzz.sh $(FUZZ_BUILD) $(FUZZ_SECONDS) $(FUZZ_TARGETS)
 
 clean:
 	rm -rf $(BUILD) $(ASAN_BUILD) $(FUZZ_BUILD) out demo-out

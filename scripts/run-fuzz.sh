@@ -24,11 +24,17 @@ for t in "${targets[@]}"; do
   corpus="$build/corpus/$t" findings="$build/findings/$t"
   mkdir -p "$corpus" "$findings"
   # assimp 5.2 leaks, hangs and over-allocates inside itself on malformed FBX / COLLADA files
-  # (docs/fuzzing.md): those targets run without leak detection, in fork mode, and go on after a
-  # finding (each is kept), so that they fuzz for the whole time.
+  # (docs/fuzzing.md): run in process, those targets run without leak detection, in fork mode, and
+  # go on after a finding (each is kept), so that they fuzz for the whole time. With
+  # ISOKIT_FUZZ_ISOLATE=1 they read as isokit-skin does (assimp in a child process) and, like the
+  # other targets, stop at their first finding.
   extra=(-detect_leaks=1)
   case "$t" in
-    fbx | dae) extra=(-detect_leaks=0 -fork=1 -ignore_crashes=1 -ignore_timeouts=1 -ignore_ooms=1) ;;
+    fbx | dae)
+      if [ -z "${ISOKIT_FUZZ_ISOLATE:-}" ] || [ "${ISOKIT_FUZZ_ISOLATE}" = 0 ]; then
+        extra=(-detect_leaks=0 -fork=1 -ignore_crashes=1 -ignore_timeouts=1 -ignore_ooms=1)
+      fi
+      ;;
   esac
   start=$(date +%s)
   "$exe" -max_total_time="$seconds" -timeout="$timeout_s" -rss_limit_mb="$rss_mb" \

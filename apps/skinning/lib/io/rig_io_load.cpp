@@ -19,6 +19,8 @@
 #include <assimp/Importer.hpp>
 
 #include "io/gltf_io.h"
+#include "io/isolated.h"
+#include "io/rig_wire.h"
 #include "isokit/core/error.h"
 #include "isokit/skinning/procedural.h"
 #include "isokit/skinning/rig_io.h"
@@ -32,6 +34,10 @@ namespace fs = std::filesystem;
 // Most frames a clip may have when sampled (a day at 30 fps, 2.6 M frames, is beyond any rig's
 // clip; the bound keeps a corrupt key time from overflowing the frame count).
 constexpr int kMaxClipFrames = 10000000;
+
+// Most joint transforms (frames x joints) a sampled clip may hold: 2^22, 512 MiB of transforms
+// (an hour of 30 fps motion capture on 38 joints). Longer clips are skipped with a warning.
+constexpr double kMaxClipSamples = 4194304;
 
 // Relative tolerance under which two bind matrices of one joint count as equal.
 constexpr double kBindTolerance = 1e-4;
@@ -975,6 +981,18 @@ void Loader::build_clips() {
             "lasts " + format_number(last) + " s, more than " + std::to_string(kMaxClipFrames) +
                 " frames at " + format_number(options_.fps) + " fps",
             "fix the key times in the file (or sample it at a lower --fps)");
+    // A valid clip too long to sample (found by fuzzing: two keys 13 hours apart took 26 s and
+    // 1.8 GB) is skipped with a warning, so that the rest of the file still loads.
+    const double samples =
+        (std::ceil(last * options_.fps) + 1) * double(std::max<std::size_t>(rig_.joints.size(), 1));
+    if (samples > kMaxClipSamples) {
+      report_.warnings.push_back(
+          "animation " + quote(name) + " lasts " + format_number(last) + " s: " + format_number(samples) +
+          " joint transforms at " + format_number(options_.fps) + " fps, more than the " +
+          std::to_string(kMaxClipSamples) +
+          " a clip may have (512 MiB); skipped (sample it at a lower --fps or cut it)");
+      continue;
+    }
     rig_.clips.push_back(sample_clip(name, channel, relevant, rest_trs, last, tps));
   }
 }
@@ -1112,8 +1130,29 @@ Rig load_rig(const std::string& path, const LoadOptions& options, LoadReport* re
   LoadReport local;
   LoadReport& r = report ? *report : local;
   r = LoadReport{};
-  Loader loader(path, options, r);
-  return loader.load();
+  const std::string ext = gltf::extension(path);
+  if (ext == ".gltf" || ext == ".glb" || !options.isolate_importer || !io::isolation_available()) {
+    Loader loader(path, options, r);
+    return loader.load();
+  }
+  // assimp in a child process: its aborts and crashes on malformed files end the child only.
+  LoadOptions in_child = options;
+  in_child.isolate_importer = false;
+  const std::string bytes = io::run_isolated(
+      [&] {
+        LoadReport child_report;
+        Loader loader(path, in_child, child_report);
+        const Rig rig = loader.load();
+        return io::encode_rig(rig, child_report);
+      },
+      io::IsolationLimits{options.importer_timeout_seconds, options.importer_memory_mib},
+      path + ": assimp reading the file",
+      "the file is malformed or uses something assimp 5.2 cannot read: export it again (glTF 2.0 .glb "
+      "is read without assimp), or raise LoadOptions::importer_timeout_seconds / importer_memory_mib "
+      "if it is only large");
+  Rig rig;
+  io::decode_rig(bytes, path, rig, r);
+  return rig;
 }
 
 }  // namespace isokit::skinning

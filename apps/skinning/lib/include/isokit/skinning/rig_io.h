@@ -18,6 +18,7 @@
 /// Writers write atomically (isokit::write_file_atomically): no half-written file is left.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -49,6 +50,19 @@ struct LoadOptions {
   /// pose, and its clips: an animation-only file (no mesh needed). The rig has no vertices.
   /// Default false.
   bool skeleton_only{false};
+  /// Read FBX, COLLADA and the other formats that go through assimp in a child process (POSIX
+  /// fork), so that assimp's aborts, crashes, hangs and runaway allocations on malformed files
+  /// (docs/fuzzing.md, "Known limits") end as an InputError naming the file instead of ending
+  /// the caller's process. Default true; false reads in the calling process (the fuzz targets,
+  /// which need coverage feedback from the loader). glTF is always read in process (tinygltf,
+  /// fuzzed and fixed in isokit). Where fork() is unavailable the read is in process.
+  bool isolate_importer{true};
+  /// Wall-clock limit of that child process in seconds, > 0. Default 600 (the FBX rigs of
+  /// docs/skinning-real-rigs.md load in about a second).
+  double importer_timeout_seconds{600};
+  /// Address-space limit of that child process in MiB; 0 = none. Default 8192 (the real rigs
+  /// load in tens of MiB; a malformed COLLADA file grows past 4 GiB within a minute).
+  std::size_t importer_memory_mib{8192};
 };
 
 /// What `load_rig` found (for the CLI's summary); `warnings` lists everything it changed or
