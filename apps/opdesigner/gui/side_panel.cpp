@@ -38,6 +38,8 @@ void Panels::draw_side_panel() {
               model_.last_solve_was_schur() ? "schur" : "refactor");
   draw_history_and_progress();
   ImGui::Separator();
+  draw_curve_panel();
+  ImGui::Separator();
   draw_file_panel();
   ImGui::Separator();
   draw_check_panel();
@@ -70,6 +72,33 @@ void Panels::draw_history_and_progress() {
   }
   if (!model_.background_error().empty())
     ImGui::TextColored(ImVec4(1, 0.3f, 0.3f, 1), "background: %s", model_.background_error().c_str());
+}
+
+/// Per curve: its kind and keyframes (click one to show its d, x to delete it), a keyframe at the
+/// displayed d, deleting the curve; and a new contact line.
+void Panels::draw_curve_panel() {
+  const auto& curves = model_.spec().curves;
+  for (int c = 0; c < int(curves.size()); ++c) {
+    ImGui::PushID(c);
+    ImGui::Text("%d %s:", c, curves[c].kind == CurveKind::kContact ? "contact" : "boundary");
+    for (int k = 0; k < int(curves[c].keyframes.size()); ++k) {
+      const double kd = curves[c].keyframes[k].d;
+      ImGui::SameLine();
+      ImGui::PushID(k);
+      if (ImGui::SmallButton(fmt("d=%.2f", kd).c_str())) model_.set_d(kd);
+      ImGui::SameLine(0, 1);
+      if (ImGui::SmallButton("x")) report(model_.delete_keyframe(c, k));
+      ImGui::PopID();
+    }
+    ImGui::SameLine();
+    if (ImGui::SmallButton("+ keyframe at d")) report(model_.add_keyframe(c));
+    ImGui::SameLine();
+    if (ImGui::SmallButton("delete curve")) report(model_.delete_curve(c));
+    ImGui::PopID();
+  }
+  if (ImGui::SmallButton("+ contact line")) {
+    report(model_.add_curve(CurveKind::kContact, CurveType::kPolyline, {{0.5, 0.5}, {0.6, 0.6}}));
+  }
 }
 
 void Panels::draw_file_panel() {

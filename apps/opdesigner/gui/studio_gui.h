@@ -74,6 +74,7 @@ class Panels {
   void draw_curves(ImDrawList* dl);
   void draw_check_marks(ImDrawList* dl);
   void draw_side_panel();
+  void draw_curve_panel();
   void draw_file_panel();
   void draw_history_and_progress();
   void draw_check_panel();
