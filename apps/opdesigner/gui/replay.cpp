@@ -121,7 +121,12 @@ std::optional<ScriptEvent> ScriptPlayer::finish_frame(StudioModel& model) {
   ++step_;
   bool finished = true;
   if (e.kind == EventKind::kMove || e.kind == EventKind::kFrames) finished = step_ >= e.frames;
-  if (e.kind == EventKind::kWaitSolved) finished = model.fully_solved() || step_ >= e.frames;
+  if (e.kind == EventKind::kWaitSolved) {
+    finished = model.fully_solved() || step_ >= e.frames;
+    if (finished && !model.fully_solved())
+      failures_.push_back("event " + std::to_string(next_ + 1) + " (wait_solved): not solved after " +
+                          std::to_string(e.frames) + " frames");
+  }
   if (e.kind == EventKind::kKey) finished = true;  // the release comes next frame
   if (finished) {
     ++next_;

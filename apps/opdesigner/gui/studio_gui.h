@@ -115,6 +115,8 @@ class ScriptPlayer {
   bool done() const { return next_ >= events_.size() && !key_release_ && !release_frame_; }
   /// Frames in which a move with the button held was delivered (for the latency).
   const std::vector<int>& drag_input_frames() const { return drag_frames_; }
+  /// Events that did not do what they asked (e.g. wait_solved ran out of frames).
+  const std::vector<std::string>& failures() const { return failures_; }
 
  private:
   plot::Point2 resolve(const ScriptTarget& t, const Layout& layout, StudioModel& model) const;
@@ -128,6 +130,7 @@ class ScriptPlayer {
   bool release_frame_{false};       // this frame only releases a key
   bool ctrl_{false}, shift_{false};
   std::vector<int> drag_frames_;
+  std::vector<std::string> failures_;
 };
 
 }  // namespace isokit::studio::gui

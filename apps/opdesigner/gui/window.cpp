@@ -251,13 +251,17 @@ int run_gui(const GuiOptions& o) {
                    {"marks", marks},
                    {"final", snapshot(*model, panels.layout(), stats.frame)},
                    {"messages", panels.messages()},
+                   {"script_failures", player ? player->failures() : std::vector<std::string>{}},
                    {"resolution", model->spec().resolution},
                    {"gl_renderer", reinterpret_cast<const char*>(glGetString(GL_RENDERER))},
                    {"window", {o.width, o.height}}};
     write_text_file_atomically(report_path, report.dump(1) + "\n");
   }
   glfwDestroyWindow(window);
-  return 0;
+  if (player)
+    for (const auto& f : player->failures())
+      std::fprintf(stderr, "isokit-opdesigner gui: script: %s\n", f.c_str());
+  return player && !player->failures().empty() ? 2 : 0;
 }
 
 }  // namespace isokit::studio
