@@ -36,6 +36,12 @@
 
 namespace isokit::operators {
 
+/// Version of the generator's output: part of every operator cache key (cache.h), so grids
+/// cached by an older generator are regenerated. Bump it whenever a change to the generator (its
+/// discretisation, constraints, profile sampling) changes the grids it produces; changes that only
+/// alter the cost (solver options, schemes) do not need a bump.
+inline constexpr int kBiharmonicGeneratorVersion = 1;
+
 /// Sparse factorisation: CHOLMOD (SuiteSparse) or Eigen's SparseLU; kAuto picks CHOLMOD when
 /// isokit was built with it.
 enum class SparseBackend { kAuto, kCholmod, kSparseLU };
