@@ -18,6 +18,7 @@
 #include "isokit/core/math.h"
 #include "isokit/skinning/bake_job.h"
 #include "isokit/skinning/fit_quality.h"
+#include "isokit/skinning/grid_operators.h"
 #include "isokit/skinning/procedural.h"
 
 using namespace isokit::skinning;
@@ -119,6 +120,28 @@ void print_fit(const FittedRig& fitted) {
       "   other joint; many unrelated vertices mean a primitive reaching where it should not)\n",
       100 * q.worst_to_surface_p95(), 100 * q.worst_to_surface_max(), 100 * q.worst_from_surface_p95(),
       100 * q.worst_from_surface_max(), q.diagonal, q.unrelated_inside());
+}
+
+// `info --fit`: the operator of every fitted joint in both trees (no grid is generated):
+// union, blend, a preset, or a designed operator with its spec file and cache key.
+void print_operators(const FittedRig& fitted, const SkinSetup& setup) {
+  const Rig& rig = fitted.rig();
+  std::printf("operators (setup %s):\n  %-24s %-40s %s\n", setup.source.c_str(), "joint",
+              "2014 tree (tracking2014)", "2013 tree (implicit2013)");
+  for (const BonePart& b : fitted.bones()) {
+    if (!b.fitted) continue;
+    const std::string& name = rig.joints[static_cast<std::size_t>(b.joint)].name;
+    std::string ops[2];
+    int i = 0;
+    for (TreeKind t : {TreeKind::k2014, TreeKind::k2013}) {
+      try {
+        ops[i++] = describe_joint_operator(setup, name, setup.operator_for(name, t));
+      } catch (const isokit::InputError& e) {  // a joint spec on a blend joint of the 2013 tree
+        ops[i++] = std::string("error: ") + e.what();
+      }
+    }
+    std::printf("  %-24s %-40s %s\n", name.c_str(), ops[0].c_str(), ops[1].c_str());
+  }
 }
 
 /// Everything the command line sets.
@@ -239,6 +262,7 @@ int run_info(const Args& a, const Progress& progress) {
     const Skinner skinner(std::move(rig), a.info_setup.empty() ? SkinSetup{} : load_setup(a.info_setup),
                           progress);
     print_fit(skinner.fitted());
+    print_operators(skinner.fitted(), skinner.setup());
   }
   return 0;
 }

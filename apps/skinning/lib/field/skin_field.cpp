@@ -5,8 +5,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <map>
-#include <mutex>
 #include <numeric>
 
 #include "isokit/core/error.h"
@@ -15,33 +13,17 @@
 #include "isokit/operators/biharmonic.h"
 #include "isokit/operators/controller.h"
 #include "isokit/skinning/deform.h"
+#include "isokit/skinning/grid_operators.h"
 #include "isokit/track/mesh.h"
 
 namespace isokit::skinning {
 
 namespace {
 
-std::shared_ptr<const operators::GridOperator> cached_operator(const std::string& preset, int res, int slices,
-                                                               const Progress& progress) {
-  static std::mutex m;
-  static std::map<std::string, std::shared_ptr<const operators::GridOperator>> cache;
-  const std::string key = preset + "/" + std::to_string(res) + "/" + std::to_string(slices);
-  std::lock_guard<std::mutex> lock(m);
-  auto it = cache.find(key);
-  if (it != cache.end()) return it->second;
-  operators::OperatorSpec spec = operators::preset_spec(preset, res);
-  spec.slices = slices;
-  operators::BiharmonicOptions bo;
-  if (progress) bo.progress = [&](int done, int total) { progress("operator " + preset, done, total); };
-  operators::BiharmonicOperatorGenerator gen(spec, bo);
-  auto op = std::make_shared<const operators::GridOperator>(gen.generate());
-  cache[key] = op;
-  return op;
-}
-
-/// The node operator of a joint, and its tag's role (2014: bulge joints form bulge pairs).
-implicit::JointSetup joint_setup(JointOperator op, const SkinSetup& setup, TreeKind kind,
-                                 const Progress& progress) {
+/// The node operator of `joint`, and its tag's role (2014: bulge joints form bulge pairs); a
+/// grid operator's controller goes to `controller`.
+implicit::JointSetup joint_setup(const std::string& joint, JointOperator op, const SkinSetup& setup,
+                                 TreeKind kind, const Progress& progress, operators::Controller& controller) {
   implicit::JointSetup js;
   switch (op) {
     case JointOperator::kUnion:
@@ -53,19 +35,17 @@ implicit::JointSetup joint_setup(JointOperator op, const SkinSetup& setup, TreeK
       js.role = implicit::NodeRole::Blend;
       break;
     case JointOperator::kBulge:
-      js.op = implicit::NodeOperator::grid_operator(
-          cached_operator("bulge", setup.operator_resolution, setup.operator_slices, progress),
-          operators::Controller::preset(setup.bulge_controller), "bulge");
-      js.bulge_pair = kind == TreeKind::k2014;
-      js.role = implicit::NodeRole::Bulge;
-      break;
     case JointOperator::kContact:
-    case JointOperator::kAuto:
-      js.op = implicit::NodeOperator::grid_operator(
-          cached_operator("contact", setup.operator_resolution, setup.operator_slices, progress),
-          operators::Controller::preset(setup.contact_controller), "contact");
-      js.role = implicit::NodeRole::Contact;
+    case JointOperator::kAuto: {
+      const bool bulge = op == JointOperator::kBulge;
+      const JointGridOperator g =
+          joint_grid_operator(setup, joint, bulge ? op : JointOperator::kContact, progress);
+      controller = g.controller;
+      js.op = implicit::NodeOperator::grid_operator(g.grid, g.controller, bulge ? "bulge" : "contact");
+      js.bulge_pair = bulge && kind == TreeKind::k2014;
+      js.role = bulge ? implicit::NodeRole::Bulge : implicit::NodeRole::Contact;
       break;
+    }
   }
   return js;
 }
@@ -91,9 +71,7 @@ struct SkinField::Skeleton {
 };
 
 SkinField::SkinField(const FittedRig& fitted, const SkinSetup& setup, TreeKind tree, const Progress& progress)
-    : fitted_(&fitted),
-      kind_(tree == TreeKind::kAuto ? TreeKind::k2014 : tree),
-      bulge_controller_(operators::Controller::preset(setup.bulge_controller)) {
+    : fitted_(&fitted), kind_(tree == TreeKind::kAuto ? TreeKind::k2014 : tree) {
   const Skeleton sk = compressed_skeleton(setup, progress);
   const implicit::CompositionTree t = kind_ == TreeKind::k2013
                                           ? implicit::build_tree_2013(sk.parts, sk.joints)
@@ -118,9 +96,12 @@ SkinField::Skeleton SkinField::compressed_skeleton(const SkinSetup& setup, const
     sk.parts.parts.push_back(b.fit.field());
     sk.parts.transforms.push_back(to_rigid3f(to_affine(b.fit.local_to_world)));
     joint_of_leaf_id_.push_back(j);
-    const JointOperator op = setup.operator_for(r.joints[j].name, kind_);
-    joint_ops_.push_back(r.joints[j].name + ": " + to_string(op));
-    sk.joints.push_back(joint_setup(op, setup, kind_, progress));
+    const std::string& name = r.joints[j].name;
+    const JointOperator op = setup.operator_for(name, kind_);
+    joint_ops_.push_back(name + ": " + describe_joint_operator(setup, name, op));
+    operators::Controller controller = operators::Controller::preset(setup.bulge_controller);
+    sk.joints.push_back(joint_setup(name, op, setup, kind_, progress, controller));
+    leaf_controllers_.push_back(controller);
   }
   hang_roots_under_first(sk.parts.parent);
   return sk;
@@ -142,7 +123,8 @@ void SkinField::find_bulge_gates() {
     const int parent = fitted_->primitive_parent(child);
     if (parent < 0) continue;
     gates_.push_back({i, fitted_->bones()[std::size_t(parent)].joint,
-                      fitted_->bones()[std::size_t(child)].joint, program.controller(i)});
+                      fitted_->bones()[std::size_t(child)].joint, program.controller(i),
+                      leaf_controllers_[std::size_t(tag.joint)]});
   }
 }
 
@@ -161,7 +143,7 @@ std::shared_ptr<const implicit::Pose> SkinField::pose_of(const std::vector<Affin
     const Eigen::Matrix3d rel = rigid_part(skin[std::size_t(g.parent_joint)]).linear().transpose() *
                                 rigid_part(skin[std::size_t(g.child_joint)]).linear();
     const double c = std::clamp((rel.trace() - 1.0) / 2.0, -1.0, 1.0);
-    const float cap = static_cast<float>(bulge_controller_.eval(std::acos(c)));
+    const float cap = static_cast<float>(g.controller.eval(std::acos(c)));
     operators::ControllerTable t = g.base;
     for (float& v : t.values) v = std::min(v, cap);
     pose->set_controller(*program_, g.instruction, t);

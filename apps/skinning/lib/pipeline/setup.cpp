@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <nlohmann/json.hpp>
@@ -49,6 +50,31 @@ JointOperator SkinSetup::operator_for(const std::string& joint, TreeKind t) cons
 float SkinSetup::relaxation_for(const std::string& joint) const {
   auto it = joints.find(joint);
   return it != joints.end() ? it->second.relaxation : 1.0f;
+}
+
+namespace {
+
+/// A joint's own spec needs a grid operator (contact or bulge). \throw InputError otherwise.
+void require_grid_joint(const SpecFile& file, const std::string& joint, JointOperator op,
+                        const std::string& why) {
+  require(
+      op == JointOperator::kContact || op == JointOperator::kBulge, file.key,
+      "joint '" + joint + "' has an operator spec, but its operator is '" + to_string(op) + "'" + why +
+          ", which has no grid",
+      "set joints." + joint + ".operator to \"contact\" or \"bulge\", or remove joints." + joint + ".spec");
+}
+
+}  // namespace
+
+const SpecFile* SkinSetup::spec_for(const std::string& joint, JointOperator op) const {
+  auto it = joints.find(joint);
+  if (it != joints.end() && it->second.spec) {
+    require_grid_joint(*it->second.spec, joint, op, " (as resolved for this tree)");
+    return &*it->second.spec;
+  }
+  if (op == JointOperator::kContact && contact_spec) return &*contact_spec;
+  if (op == JointOperator::kBulge && bulge_spec) return &*bulge_spec;
+  return nullptr;
 }
 
 namespace {
@@ -111,6 +137,27 @@ void check_keys(const json& obj, std::initializer_list<const char*> keys, const 
   }
 }
 
+/// The spec file named by `obj[key]` (a relative path is joined to `base_dir`), loaded.
+SpecFile read_spec_file(const json& obj, const char* key, const std::string& where,
+                        const std::string& base_dir) {
+  std::string path;
+  read(obj, key, path, where);
+  SpecFile f;
+  f.key = where + "." + key;
+  require(!path.empty(), f.key, "is empty",
+          "give the path of an isokit-operator-spec JSON file (isokit-opdesigner writes them)");
+  namespace fs = std::filesystem;
+  f.path = fs::path(path).is_relative() && !base_dir.empty()
+               ? (fs::path(base_dir) / path).lexically_normal().string()
+               : path;
+  try {
+    f.spec = operators::load_spec(f.path);
+  } catch (const InputError& e) {
+    throw InputError(f.key + ": " + e.what());
+  }
+  return f;
+}
+
 /// `tree`: "auto", "2013" or "2014".
 TreeKind tree_from_json(const json& j, const std::string& source) {
   std::string tree = "auto";
@@ -122,12 +169,12 @@ TreeKind tree_from_json(const json& j, const std::string& source) {
 }
 
 /// Section `joints`: operator and relaxation per joint name.
-void read_joints(const json& js, const std::string& source, SkinSetup& s) {
+void read_joints(const json& js, const std::string& source, const std::string& base_dir, SkinSetup& s) {
   require(js.is_object(), source + ".joints", "must be an object keyed by joint name",
           "see docs/skinning.md");
   for (auto it = js.begin(); it != js.end(); ++it) {
     const std::string w = source + ".joints." + it.key();
-    check_keys(it.value(), {"operator", "relaxation"}, w);
+    check_keys(it.value(), {"operator", "relaxation", "spec"}, w);
     JointSettings js_;
     std::string op = "auto";
     read(it.value(), "operator", op, w);
@@ -136,6 +183,14 @@ void read_joints(const json& js, const std::string& source, SkinSetup& s) {
     require(js_.relaxation >= 0 && js_.relaxation <= 1, w + ".relaxation",
             "must be in [0, 1] (got " + format_number(js_.relaxation) + ")",
             "0 = no tangential move, 1 = full");
+    if (it.value().contains("spec")) {
+      js_.spec = read_spec_file(it.value(), "spec", w, base_dir);
+      if (js_.op == JointOperator::kUnion || js_.op == JointOperator::kBlend)
+        require_grid_joint(*js_.spec, it.key(), js_.op, "");
+      if (js_.op == JointOperator::kAuto &&
+          (s.default_operator == JointOperator::kUnion || s.default_operator == JointOperator::kBlend))
+        require_grid_joint(*js_.spec, it.key(), s.default_operator, " (default_operator)");
+    }
     s.joints[it.key()] = js_;
   }
 }
@@ -181,8 +236,13 @@ void read_fit(const json& f, const std::string& w, implicit::PartFitOptions& fit
 }
 
 /// Section `operators`: grid operators and their controllers.
-void read_operators(const json& o, const std::string& w, SkinSetup& s) {
-  check_keys(o, {"resolution", "slices", "bulge_gate", "contact_controller", "bulge_controller"}, w);
+void read_operators(const json& o, const std::string& w, const std::string& base_dir, SkinSetup& s) {
+  check_keys(o,
+             {"resolution", "slices", "bulge_gate", "contact_controller", "bulge_controller", "contact_spec",
+              "bulge_spec"},
+             w);
+  if (o.contains("contact_spec")) s.contact_spec = read_spec_file(o, "contact_spec", w, base_dir);
+  if (o.contains("bulge_spec")) s.bulge_spec = read_spec_file(o, "bulge_spec", w, base_dir);
   read(o, "resolution", s.operator_resolution, w);
   read(o, "bulge_gate", s.bulge_gate, w);
   read(o, "contact_controller", s.contact_controller, w);
@@ -335,7 +395,7 @@ void apply_paper_preset(SkinSetup& s) {
   s.substeps.fold_rule = false;
 }
 
-SkinSetup setup_from_json(const std::string& text, const std::string& source) {
+SkinSetup setup_from_json(const std::string& text, const std::string& source, const std::string& base_dir) {
   json j;
   try {
     j = json::parse(text);
@@ -363,9 +423,9 @@ SkinSetup setup_from_json(const std::string& text, const std::string& source) {
   std::string def = "auto";
   read(j, "default_operator", def, source);
   s.default_operator = joint_operator_from_string(def, source + ".default_operator");
-  if (j.contains("joints")) read_joints(j.at("joints"), source, s);
+  if (j.contains("joints")) read_joints(j.at("joints"), source, base_dir, s);
   if (j.contains("fit")) read_fit(j.at("fit"), source + ".fit", s.fit, s.capsule_match, s.max_fit_error);
-  if (j.contains("operators")) read_operators(j.at("operators"), source + ".operators", s);
+  if (j.contains("operators")) read_operators(j.at("operators"), source + ".operators", base_dir, s);
   if (j.contains("tracker")) read_tracker(j.at("tracker"), source + ".tracker", s);
   if (j.contains("projector")) read_projector(j.at("projector"), source + ".projector", s.projector);
   if (j.contains("substeps")) read_substeps(j.at("substeps"), source + ".substeps", s.substeps);
@@ -377,7 +437,7 @@ SkinSetup load_setup(const std::string& path) {
   require(bool(in), path, "cannot be read", "check the setup file path");
   std::stringstream ss;
   ss << in.rdbuf();
-  return setup_from_json(ss.str(), path);
+  return setup_from_json(ss.str(), path, std::filesystem::path(path).parent_path().string());
 }
 
 }  // namespace isokit::skinning

@@ -8,10 +8,11 @@
 /// { "version": 1,
 ///   "tree": "auto",
 ///   "default_operator": "auto",
-///   "joints": { "LeftForeArm": { "operator": "bulge", "relaxation": 0.5 } },
+///   "joints": { "LeftForeArm": { "operator": "bulge", "relaxation": 0.5, "spec": "my_bulge.json" } },
 ///   "fit": { "samples": 50, "cull_h": 0.05, "grid_resolution": 32, "seed": 1,
 ///            "opening_offset": 0.1 },
-///   "operators": { "resolution": 128, "slices": 128 },
+///   "operators": { "resolution": 128, "slices": 128, "contact_spec": "my_contact.json",
+///                  "bulge_spec": "my_bulge.json" },
 ///   "tracker": { "max_iterations": 100, "tolerance": 1e-5, "sigma": 1.0, "contact_angle_deg": 55,
 ///                "initial_newton_steps": 10, "smoothing_steps": 5, "beta_diffusion_steps": 3,
 ///                "relaxation": "jacobi" },
@@ -21,12 +22,26 @@
 /// `tree`: "auto" (the method's paper), "2013" or "2014". `default_operator`: "auto" (2014:
 /// contact, 2013: blend), "union", "blend", "bulge" or "contact". `tracker.relaxation`: "jacobi"
 /// or "cg" (track::Relaxation).
+///
+/// Designed operators (docs/operators.md, "Using a designed operator in skinning"):
+/// `operators.contact_spec` / `operators.bulge_spec` name an operator spec file
+/// (isokit-operator-spec JSON, e.g. from isokit-opdesigner) used instead of the built-in preset by
+/// every contact / bulge joint; `joints.NAME.spec` names one for that joint alone (its operator
+/// must resolve to contact or bulge). Relative paths resolve against the setup file's folder. With
+/// a spec file, the operator's controller is the spec's own (designing the controller is part of
+/// designing the operator; `operators.contact_controller` / `bulge_controller` apply to the
+/// presets only), and the grid's resolution and slices are the setup's `operators.resolution` /
+/// `slices` (as for the presets; the spec's own are replaced). Grids are checked
+/// (operators::check_operator) and kept in the operator disk cache (operators/cache.h).
 #pragma once
 
 #include <map>
 #include <string>
 
+#include <optional>
+
 #include "isokit/implicit/fit.h"
+#include "isokit/operators/spec.h"
 #include "isokit/track/projector2013.h"
 #include "isokit/track/tracker.h"
 
@@ -40,6 +55,13 @@ enum class JointOperator { kAuto, kUnion, kBlend, kBulge, kContact };
 
 enum class TreeKind { kAuto, k2013, k2014 };
 
+/// An operator spec file named by the setup, loaded and validated when the setup is read.
+struct SpecFile {
+  std::string key;   ///< the setup key that named it, for messages ("s.json.operators.contact_spec")
+  std::string path;  ///< resolved: a relative path is joined to the setup file's folder
+  operators::OperatorSpec spec;  ///< as in the file (SkinField applies the setup's resolution and slices)
+};
+
 /// Settings of one joint (setup key `joints.NAME`).
 struct JointSettings {
   /// Operator between the joint's bone and its parent's; kAuto: `SkinSetup::default_operator`.
@@ -47,6 +69,9 @@ struct JointSettings {
   /// Tracker relaxation mask of the joint's vertices (2014 §5), in [0, 1]: 0 = no tangential move,
   /// 1 (default) = full.
   float relaxation{1.0f};
+  /// The joint's own grid operator (key `joints.NAME.spec`), replacing the preset and
+  /// `SkinSetup::contact_spec` / `bulge_spec`; the joint's operator must be contact or bulge.
+  std::optional<SpecFile> spec;
 };
 
 /// Animation sub-stepping (2014 §5.2; setup key `substeps`): an animation step is split into
@@ -103,6 +128,9 @@ struct SkinSetup {
   /// bulge operators. Setup keys `operators.contact_controller`, `operators.bulge_controller`.
   std::string contact_controller{"contact"};
   std::string bulge_controller{"bulge"};
+  /// Designed operators replacing the presets of every contact / bulge joint without its own
+  /// spec (keys `operators.contact_spec`, `operators.bulge_spec`). Default: none (the presets).
+  std::optional<SpecFile> contact_spec, bulge_spec;
   track::TrackerOptions tracker{};      ///< the 2014 tracker. Setup key `tracker`
   track::ProjectorOptions projector{};  ///< the 2013 projection. Setup key `projector`
   SubstepOptions substeps{};            ///< setup key `substeps`
@@ -121,6 +149,10 @@ struct SkinSetup {
   /// The operator chosen for `joint` (resolving kAuto with the tree kind).
   JointOperator operator_for(const std::string& joint, TreeKind tree) const;
   float relaxation_for(const std::string& joint) const;
+  /// The spec file of `joint` with operator `op`: the joint's own, else the setup's for a contact
+  /// or bulge joint; nullptr for the preset. 	hrow InputError when the joint has its own spec
+  /// but `op` is union or blend (the message names the joint and the fix).
+  const SpecFile* spec_for(const std::string& joint, JointOperator op) const;
 };
 
 const char* to_string(JointOperator op);
@@ -140,9 +172,13 @@ JointOperator joint_operator_from_string(const std::string& s, const std::string
 /// preset".
 void apply_paper_preset(SkinSetup& setup);
 
-/// Parses a setup (validated). \throw InputError naming `source`, the key and the fix.
-SkinSetup setup_from_json(const std::string& text, const std::string& source);
-/// \throw InputError naming the file when it cannot be read or is invalid.
+/// Parses a setup (validated; spec files are loaded). Relative spec paths resolve against
+/// `base_dir` (empty: the current directory). \throw InputError naming `source`, the key and the
+/// fix (a spec file's own errors are prefixed with the key that named it).
+SkinSetup setup_from_json(const std::string& text, const std::string& source,
+                          const std::string& base_dir = "");
+/// Spec paths relative to the setup file's folder. \throw InputError naming the file when it
+/// cannot be read or is invalid.
 SkinSetup load_setup(const std::string& path);
 
 }  // namespace isokit::skinning

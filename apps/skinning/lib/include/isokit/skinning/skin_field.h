@@ -23,8 +23,10 @@ class SkinField {
  public:
   /// Builds the tree: joints without a primitive are skipped (their children attach to the
   /// nearest ancestor with one; several roots hang under the first). Grid operators (contact,
-  /// bulge) are generated once per process and resolution (2014 §4.2). The current pose is the
-  /// fitted (rest) one.
+  /// bulge: presets or the setup's spec files) are generated once per process and kept in the
+  /// operator disk cache (grid_operators.h, 2014 §4.2). The current pose is the fitted (rest) one.
+  /// \throw InputError for a spec whose grid fails its check, or a joint spec on a union / blend
+  /// joint.
   SkinField(const FittedRig& fitted, const SkinSetup& setup, TreeKind tree, const Progress& progress = {});
 
   /// The pose of skinning matrices `skin` (one per joint): every primitive moved by the rigid
@@ -44,7 +46,8 @@ class SkinField {
   const implicit::Program& program() const { return *program_; }
   const implicit::Pose& pose() const { return *pose_; }
   TreeKind kind() const { return kind_; }
-  /// Per-joint operator names ("joint: operator", for reports).
+  /// Per-joint operators ("joint: operator", describe_joint_operator: "Bone1: contact (preset)",
+  /// "Bone2: bulge (spec my_bulge.json, hash ...)"), for reports.
   std::vector<std::string> joint_operators() const { return joint_ops_; }
 
  private:
@@ -53,6 +56,7 @@ class SkinField {
     std::size_t instruction;
     int parent_joint, child_joint;  // skinning-matrix indices
     operators::ControllerTable base;
+    operators::Controller controller;  ///< the node's own d_b (preset or spec file), for the cap
   };
   struct Skeleton;
   Skeleton compressed_skeleton(const SkinSetup& setup, const Progress& progress);
@@ -65,7 +69,8 @@ class SkinField {
   std::vector<int> joint_of_leaf_id_;  ///< leaf id (compressed bone) -> rig joint
   std::vector<std::string> joint_ops_;
   std::vector<BulgeGate> gates_;
-  operators::Controller bulge_controller_;  ///< the gate's d_b (SkinSetup::bulge_controller)
+  /// Per leaf id: the controller of the joint's grid operator (the bulge preset for other joints).
+  std::vector<operators::Controller> leaf_controllers_;
 };
 
 }  // namespace isokit::skinning
