@@ -109,8 +109,9 @@ TEST_CASE("setup: spec keys load spec files relative to the setup file", "[skinn
   CHECK(s.spec_for("Bone2", JointOperator::kUnion) == nullptr);
   CHECK(setup_from_json("{}", "s.json").spec_for("Bone2", JointOperator::kContact) == nullptr);
   // Without a folder, a relative path is relative to the current directory: here, missing.
-  CHECK_THROWS_WITH(setup_from_json(R"({"operators": {"contact_spec": "specs/bent.json"}})", "s.json"),
-                    Catch::StartsWith("s.json.operators.contact_spec: specs/bent.json"));
+  CHECK_THROWS_WITH(
+      setup_from_json(R"({"operators": {"contact_spec": "specs/bent.json"}})", "s.json"),
+      Catch::StartsWith("s.json.operators.contact_spec: 'specs/bent.json' is not a readable file"));
   CHECK(setup_from_json(R"({"operators": {"contact_spec": "specs/bent.json"}})", "s.json", t.dir().string())
             .contact_spec->spec.name == "bent");
 }
@@ -124,6 +125,8 @@ TEST_CASE("setup: bad spec keys name the key, the file and the fix", "[skinning]
                     Catch::StartsWith("s.json.operators.bulge_spec: ") && Catch::Contains("missing.json"));
   CHECK_THROWS_WITH(setup_from_json(R"({"operators": {"contact_spec": "junk.json"}})", "s.json", dir),
                     Catch::StartsWith("s.json.operators.contact_spec: ") && Catch::Contains("junk.json"));
+  CHECK_THROWS_WITH(setup_from_json(R"({"operators": {"contact_spec": "."}})", "s.json", dir),
+                    Catch::Contains("is not a readable file"));  // a folder
   CHECK_THROWS_WITH(setup_from_json(R"({"operators": {"contact_spec": ""}})", "s.json", dir),
                     Catch::Contains("s.json.operators.contact_spec: is empty"));
   CHECK_THROWS_WITH(setup_from_json(R"({"operators": {"contact_spec": 3}})", "s.json", dir),

@@ -150,6 +150,12 @@ SpecFile read_spec_file(const json& obj, const char* key, const std::string& whe
   f.path = fs::path(path).is_relative() && !base_dir.empty()
                ? (fs::path(base_dir) / path).lexically_normal().string()
                : path;
+  // A regular file only: a folder or a device (/dev/zero) would fail late or never.
+  std::error_code ec;
+  require(
+      fs::is_regular_file(f.path, ec), f.key, "'" + f.path + "' is not a readable file",
+      "give the path of an isokit-operator-spec JSON file; a relative path is relative to the setup file's "
+      "folder");
   try {
     f.spec = operators::load_spec(f.path);
   } catch (const InputError& e) {
