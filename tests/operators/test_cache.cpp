@@ -131,7 +131,8 @@ TEST_CASE("operator cache: a corrupt entry is regenerated, not an error", "[unit
   fs::remove_all(dir);
 }
 
-TEST_CASE("operator cache: an unwritable folder is a warning; no folder, no cache", "[unit][cache]") {
+TEST_CASE("operator cache: an unwritable folder is a warning, and no folder means no cache",
+          "[unit][cache]") {
   const fs::path dir = fresh_dir("unwritable");
   fs::create_directories(dir);
   std::ofstream(dir / "file") << "a file where the cache folder should be";
