@@ -1,9 +1,11 @@
 // SPDX-License-Identifier: MIT
 #include "isokit/skinning/grid_operators.h"
 
+#include <cstdint>
 #include <filesystem>
 #include <map>
 #include <mutex>
+#include <optional>
 
 #include "isokit/core/error.h"
 #include "isokit/operators/cache.h"
