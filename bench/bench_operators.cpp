@@ -1,12 +1,18 @@
 // SPDX-License-Identifier: MIT
 // Operator generation and evaluation timings (docs/performance.md, "Operators"):
-// one 128² slice (interactive editing) and a full 128³ operator, per scheme and backend.
+// one 128² slice (interactive editing) and a full 128³ operator, per scheme and backend; a 128³
+// operator loaded from the disk cache and checked (docs/operators.md, "Using a designed operator
+// in skinning").
 #include <benchmark/benchmark.h>
 
+#include <unistd.h>
 #include <cmath>
+#include <filesystem>
 
 #include "isokit/operators/analytic.h"
 #include "isokit/operators/biharmonic.h"
+#include "isokit/operators/cache.h"
+#include "isokit/operators/checks.h"
 #include "isokit/operators/controller.h"
 
 using namespace isokit::operators;
@@ -54,6 +60,35 @@ void BM_FullOperator(benchmark::State& state) {
             gen.stats().backend + " tasks=" + std::to_string(state.range(3));
   }
   state.SetLabel(label);
+}
+
+// A 128³ preset loaded from the disk cache (a hit; the entry is stored before timing, in a
+// temporary folder). Arg: preset.
+void BM_CacheLoad(benchmark::State& state) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / ("isokit-bench-cache-" + std::to_string(::getpid()));
+  const OperatorCache cache(dir.string());
+  const OperatorSpec spec = preset_spec(preset_of(int(state.range(0))), 128);
+  cache.get(spec);
+  for (auto _ : state) {
+    CachedGrid g = cache.get(spec);
+    if (!g.hit) state.SkipWithError(("cache miss: " + (g.warnings.empty() ? "" : g.warnings[0])).c_str());
+    benchmark::DoNotOptimize(g.grid.data().data());
+  }
+  fs::remove_all(dir);
+  state.SetLabel(preset_of(int(state.range(0))));
+}
+
+// check_operator on a 128³ preset (what isokit-skin runs on every grid before use). Arg: preset.
+void BM_CheckOperator(benchmark::State& state) {
+  const OperatorSpec spec = preset_spec(preset_of(int(state.range(0))), 128);
+  const GridOperator grid = generate_operator(spec);
+  for (auto _ : state) {
+    auto failure = check_operator(spec, grid);
+    if (failure) state.SkipWithError(failure->message().c_str());
+    benchmark::DoNotOptimize(&failure);
+  }
+  state.SetLabel(preset_of(int(state.range(0))));
 }
 
 // Setup alone (matrix, analysis, Schur complement).
@@ -129,6 +164,8 @@ BENCHMARK(BM_FullOperator)
     ->Args({2, 0, 0, 2})
     ->Unit(benchmark::kMillisecond)
     ->Iterations(1);
+BENCHMARK(BM_CacheLoad)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_CheckOperator)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_EditSlice)->Arg(0)->Arg(3)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_GridEval);
 BENCHMARK(BM_GradientBlend2013);

@@ -43,6 +43,29 @@ std::string strip(std::string s) {
 
 }  // namespace
 
+namespace {
+
+/// The whole stream: one read of the file's size when it can be measured (a 128³ grid is 8 MiB;
+/// through a stringstream it was copied three times), else through a stringstream.
+std::string read_all(std::ifstream& in) {
+  in.seekg(0, std::ios::end);
+  const std::streamoff size = in.tellg();
+  in.seekg(0, std::ios::beg);
+  if (size >= 0 && in) {
+    std::string b(static_cast<std::size_t>(size), '\0');
+    in.read(b.data(), size);
+    if (in.gcount() == size) return b;
+    in.clear();
+    in.seekg(0, std::ios::beg);
+  }
+  in.clear();
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+}  // namespace
+
 std::string spec_path_for(const std::string& npy_path) {
   const std::size_t slash = npy_path.find_last_of('/');
   const std::size_t dot = npy_path.find_last_of('.');
@@ -69,9 +92,7 @@ void write_npy_f32(const std::string& path, const float* data, int d0, int d1, i
 std::vector<float> read_npy_f32(const std::string& path, int* d0, int* d1, int* d2) {
   std::ifstream in(path, std::ios::binary);
   require(bool(in), path, "cannot be opened", "check the path (generate it with isokit-opdesigner generate)");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  const std::string b = ss.str();
+  const std::string b = read_all(in);
   require(b.size() >= 10 && b.compare(0, 6, "\x93NUMPY") == 0, path + ": magic", "not a NumPy .npy file",
           "pass a file written by numpy.save or isokit-opdesigner");
   const int major = static_cast<unsigned char>(b[6]);
