@@ -4,6 +4,7 @@
 // isokit-skin end to end with a spec, a temporary XDG_CACHE_HOME and the disk cache.
 #include <unistd.h>
 
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <cstdlib>
 #include <filesystem>
@@ -14,8 +15,12 @@
 #include "isokit/core/math.h"
 #include "isokit/operators/cache.h"
 #include "isokit/operators/spec.h"
+#include "isokit/skinning/animation.h"
 #include "isokit/skinning/grid_operators.h"
+#include "isokit/skinning/pipeline.h"
+#include "isokit/skinning/skin_field.h"
 #include "isokit/track/mesh_io.h"
+#include "pipeline_fixture.h"
 
 using namespace isokit::skinning;
 namespace fs = std::filesystem;
@@ -199,6 +204,43 @@ TEST_CASE("designed operators: a spec whose grid fails its check is refused in o
       CHECK(m.find('\n') == std::string::npos);
     }
   }
+}
+
+TEST_CASE("designed operators: a bulge spec's controller drives its node and its bulge gate",
+          "[skinning][designed]") {
+  // The capsule's Bone1 as a bulge joint. The spec's controller is "constant1" (d = 1 at every
+  // angle), so the gate, which caps the node by the same controller of the joint's bend, leaves
+  // it at 1; the preset keeps the bulge controller (d_b(90°) = 0.5).
+  const TempFolder t("bulge");
+  SkinSetup setup;
+  setup.operator_resolution = 32;
+  setup.operator_slices = 16;
+  setup.joints["Bone1"].op = JointOperator::kBulge;
+  SkinSetup designed = setup;
+  ops::OperatorSpec spec = ops::preset_spec("bulge", 32);
+  spec.controller = "constant1";
+  designed.bulge_spec = SpecFile{"test.operators.bulge_spec", "my_bulge.json", spec};
+  auto max_bulge_d = [](SkinSetup s) {
+    Skinner sk(testing::capsule_rig(), s);
+    SkinField& field = sk.field(TreeKind::k2014);
+    const auto bent = bend_animation(sk.rig(), {parse_bend("Bone1:x:90", sk.rig())}, 3)[1];
+    field.set_pose(skinning_matrices(sk.rig(), bent));
+    float d = -1.f;
+    const auto& instr = field.program().instructions();
+    for (std::size_t i = 0; i < instr.size(); ++i)
+      if (instr[i].leaf < 0 && field.program().tag(i).role == isokit::implicit::NodeRole::Bulge)
+        for (float v : field.pose().controller(field.program(), i).values) d = std::max(d, v);
+    const std::vector<std::string> ops = field.joint_operators();
+    return std::make_pair(d, ops);
+  };
+  const auto [preset_d, preset_ops] = max_bulge_d(setup);
+  const auto [designed_d, designed_ops] = max_bulge_d(designed);
+  CHECK(preset_d == Approx(0.5).margin(0.02));
+  CHECK(designed_d == 1.f);
+  CHECK(std::find(preset_ops.begin(), preset_ops.end(), "Bone1: bulge (preset)") != preset_ops.end());
+  CHECK(std::count_if(designed_ops.begin(), designed_ops.end(), [](const std::string& o) {
+          return o.rfind("Bone1: bulge (spec my_bulge.json, hash ", 0) == 0;
+        }) == 1);
 }
 
 #ifdef ISOKIT_SKIN_EXE
