@@ -43,7 +43,7 @@ TEST_CASE("triangle normal: orthogonal to the edges, twice the area long, outwar
   }
 }
 
-TEST_CASE("inverted triangle: the normal along +grad f at the centroid; zero gradient never", "[core]") {
+TEST_CASE("inverted triangle: the normal along +grad f at the centroid, zero gradient never", "[core]") {
   // A sphere field: gradients point inward, so an outward (counter-clockwise) triangle is fine.
   auto inward = [](const Vec3d& p) { return p * -1.0; };
   test::Rng rng(11);

@@ -305,7 +305,7 @@ TEST_CASE("fitting is deterministic for a seed", "[fit]") {
   CHECK(!(c.samples[0].position == a.samples[0].position));
 }
 
-TEST_CASE("fitting rejects degenerate parts by name; the rest of a rig still fits", "[fit]") {
+TEST_CASE("fitting rejects degenerate parts by name, the rest of a rig still fits", "[fit]") {
   MeshPart good = sphere_part(1.0, {0, 0, 0}, {0, 0, 1});
   good.name = "upper_arm";
   MeshPart empty;

@@ -40,7 +40,7 @@ TEST_CASE("t_r hits its end and mid values with zero end slopes", "[implicit][re
   }
 }
 
-TEST_CASE("t_r' agrees with central differences; t_r is decreasing and in [0, 1]", "[implicit][remap]") {
+TEST_CASE("t_r' agrees with central differences, t_r is decreasing and in [0, 1]", "[implicit][remap]") {
   test::Rng rng(11);
   for (int i = 0; i < 5000; ++i) {
     const double r = rng.uniform(0.01, 10.0);

@@ -30,7 +30,7 @@ using isokit::test::random_tree;
 using isokit::test::sampled_blend_grid;
 namespace ops = isokit::operators;
 
-TEST_CASE("program evaluation equals recursive evaluation; pruning changes no result", "[tree]") {
+TEST_CASE("program evaluation equals recursive evaluation, pruning changes no result", "[tree]") {
   test::Rng rng(31);
   for (int trial = 0; trial < 8; ++trial) {
     const CompositionTree tree = random_tree(rng, rng.integer(1, 24), false);
@@ -535,7 +535,7 @@ std::set<int> check_tags(const CompositionTree& t, const SkeletonParts& s,
 
 }  // namespace
 
-TEST_CASE("builders tag each joint's nodes with its skeleton edge; the program keeps the tags",
+TEST_CASE("builders tag each joint's nodes with its skeleton edge, the program keeps the tags",
           "[tree][builder]") {
   const SkeletonParts s = arm_skeleton();
   const auto grid = sampled_blend_grid();

@@ -147,7 +147,7 @@ TEST_CASE("studio: a drag re-solves the displayed slice at once and the changed 
   CHECK(model.grid().data() == grid_after);
 }
 
-TEST_CASE("studio: dragging at an existing keyframe moves it; undo before the background ends", "[studio]") {
+TEST_CASE("studio: dragging at an existing keyframe moves it, undo before the background ends", "[studio]") {
   StudioOptions o = test_options();
   o.background_thread = GENERATE(true, false);  // false: queued slices wait for the undo
   INFO("background thread " << o.background_thread);

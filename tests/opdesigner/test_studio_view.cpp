@@ -91,7 +91,7 @@ TEST_CASE("decile iso-lines: g = f1 gives vertical lines at 0.1 ... 0.9", "[stud
   }
 }
 
-TEST_CASE("scripts: every event parses; errors name the event and the field", "[studio]") {
+TEST_CASE("scripts: every event parses, errors name the event and the field", "[studio]") {
   const auto ev = parse_script(R"([
     {"type": "frames", "n": 3}, {"type": "move", "to": {"op": [0.4, 0.3]}, "frames": 5},
     {"type": "move", "to": {"point": [1, 2]}}, {"type": "move", "to": {"knot": 2}},

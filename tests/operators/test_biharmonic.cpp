@@ -42,7 +42,7 @@ TEST_CASE("biharmonic presets: boundary conditions, axes, 0.5 iso-line on the pr
   }
 }
 
-TEST_CASE("check_operator: presets pass; a broken edge or a foreign profile fails, naming check and slice",
+TEST_CASE("check_operator: presets pass, a broken edge or a foreign profile fails, naming check and slice",
           "[operators][checks]") {
   for (const auto& name : preset_spec_names()) {
     const OperatorSpec spec = preset_spec(name, 32);

@@ -140,7 +140,7 @@ TEST_CASE("grid operator: the direct and padded stencil paths equal the ghosted 
   }
 }
 
-TEST_CASE("grid operator: vectorised and scalar bicubic agree bit for bit; weights", "[operators][grid]") {
+TEST_CASE("grid operator: vectorised and scalar bicubic agree bit for bit, weights", "[operators][grid]") {
   // bicubic (SSE2 on x86 hosts) against bicubic_scalar (the device code) on random stencils,
   // with and without a blend towards a second slice.
   test::Rng rng(23);

@@ -43,7 +43,7 @@ TEST_CASE("bake job: an animation request names at most one source", "[skinning]
   CHECK_THROWS_AS(make_animation(r, clip), isokit::InputError);
 }
 
-TEST_CASE("bake job: no animation option plays the rig's only clip; several are listed",
+TEST_CASE("bake job: no animation option plays the rig's only clip, several are listed",
           "[skinning][bake_job]") {
   Rig r = testing::with_turn_clip(testing::capsule_rig(8, 8, 2), 4, 0.2);
   const Animation a = make_animation(r, AnimationRequest{});
@@ -74,7 +74,7 @@ TEST_CASE("bake job: the written result is the chosen method's", "[skinning][bak
   CHECK_THROWS_AS(main_result(results, Method::kLbs), isokit::InputError);
 }
 
-TEST_CASE("bake job: fit warnings name under-resolved parts; outputs are written where asked",
+TEST_CASE("bake job: fit warnings name under-resolved parts, outputs are written where asked",
           "[skinning][bake_job]") {
   SkinSetup setup;
   setup.fold_repair_min_part_vertices = 100000;  // every part is "small"
@@ -101,7 +101,7 @@ TEST_CASE("bake job: fit warnings name under-resolved parts; outputs are written
   fs::remove_all(dir);
 }
 
-TEST_CASE("bake job: --device names cpu or cuda; cuda is refused with its reason", "[skinning][bake_job]") {
+TEST_CASE("bake job: --device names cpu or cuda, cuda is refused with its reason", "[skinning][bake_job]") {
   CHECK(device_from_string("cpu") == Device::kCpu);
   CHECK(device_from_string("cuda") == Device::kCuda);
   CHECK_THROWS_WITH(device_from_string("gpu"), Catch::Contains("use cpu or cuda"));

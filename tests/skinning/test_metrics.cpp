@@ -357,7 +357,7 @@ TEST_CASE("self-intersections: degenerate triangles are reported, not tested", "
         std::vector<int>{static_cast<int>(nf), static_cast<int>(nf + 1), static_cast<int>(nf + 2)});
 }
 
-TEST_CASE("self-intersections: serial and parallel agree; pair list is capped", "[skinning][metrics]") {
+TEST_CASE("self-intersections: serial and parallel agree, pair list is capped", "[skinning][metrics]") {
   const Mesh m = join(icosphere(3), icosphere(3, 0.9, {0.7, 0.3, 0.1}));
   SelfIntersectionDetails serial, parallel;
   SelfIntersectionOptions o;

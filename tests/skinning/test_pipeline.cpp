@@ -308,7 +308,7 @@ TEST_CASE("pipeline: bad input to the skinner is rejected naming the item", "[sk
                     Catch::Contains("s.json.fit.max_error") && Catch::Contains("[0, 100]"));
 }
 
-TEST_CASE("setup: the paper preset turns every isokit addition off; later keys override it",
+TEST_CASE("setup: the paper preset turns every isokit addition off, later keys override it",
           "[skinning][setup]") {
   const SkinSetup d;
   // Every addition is on by default (else the preset would test nothing).

@@ -148,7 +148,7 @@ TEST_CASE("render: a sphere covers its analytic silhouette and nothing else", "[
 }
 
 TEST_CASE(
-    "render: the framed box projects inside the image; pixels outside the mesh's projection are background",
+    "render: the framed box projects inside the image, pixels outside the mesh's projection are background",
     "[skinning][render]") {
   const Mesh m = sphere(16, 32, 0.5, {1, 2, 3});
   RenderOptions o;
@@ -196,7 +196,7 @@ TEST_CASE(
   CHECK(object_pixels(render_mesh(m.v, m.f, o)) > 2 * covered);
 }
 
-TEST_CASE("render: deterministic; options change the picture as they should", "[skinning][render]") {
+TEST_CASE("render: deterministic, options change the picture as they should", "[skinning][render]") {
   const Mesh m = sphere(24, 48, 1.0, {0, 0, 0});
   RenderOptions o;
   o.width = 120;
@@ -270,7 +270,7 @@ TEST_CASE("render: deterministic; options change the picture as they should", "[
   }
 }
 
-TEST_CASE("render: PNG round trip through Cairo; unwritable paths are named", "[skinning][render]") {
+TEST_CASE("render: PNG round trip through Cairo, unwritable paths are named", "[skinning][render]") {
   const Mesh m = sphere(12, 24, 1.0, {0, 0, 0});
   RenderOptions o;
   o.width = 64;

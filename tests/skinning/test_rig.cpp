@@ -31,7 +31,7 @@ TEST_CASE("rig: rest pose gives identity skinning matrices and joint positions",
   CHECK(r.joint_index("C") == -1);
 }
 
-TEST_CASE("rig: weights are normalised, merged and pruned; dominant joint", "[skinning]") {
+TEST_CASE("rig: weights are normalised, merged and pruned, dominant joint", "[skinning]") {
   SkinWeights w;
   w.offsets = {0, 3, 4};
   w.joints = {0, 1, 0, 1};

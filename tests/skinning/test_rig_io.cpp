@@ -501,7 +501,7 @@ TEST_CASE("rig_io: glTF JSON of a saved rig has two weight sets and valid access
   CHECK(g.doc["animations"].size() == 2);
 }
 
-TEST_CASE("rig_io: duplicate positions are welded; the output mapping restores the file's vertices",
+TEST_CASE("rig_io: duplicate positions are welded, the output mapping restores the file's vertices",
           "[skinning][io]") {
   const Rig rig = bar_rig();
   TempDir dir("weld");

@@ -90,7 +90,7 @@ double largest_difference(const std::vector<Pose>& a, const std::vector<Pose>& b
 
 }  // namespace
 
-TEST_CASE("rig_load: duplicate node names load; the file's name shows, NAME#k selects", "[skinning][io]") {
+TEST_CASE("rig_load: duplicate node names load, the file's name shows, NAME#k selects", "[skinning][io]") {
   const Rig rig = clip_capsule();
   Scratch dir("dup");
   json doc = saved_json(rig, dir / "rig.gltf");
@@ -158,7 +158,7 @@ TEST_CASE("rig_load: separate parts, open borders and flipped faces load and are
   CHECK(s.inconsistent_edges == 3);
 }
 
-TEST_CASE("rig_load: glTF triangle strips and fans are triangulated; lines and points are skipped",
+TEST_CASE("rig_load: glTF triangle strips and fans are triangulated, lines and points are skipped",
           "[skinning][io]") {
   const Rig rig = clip_capsule();
   Scratch dir("modes");
@@ -197,7 +197,7 @@ TEST_CASE("rig_load: scale keys are applied", "[skinning][io]") {
   CHECK(largest_difference(back.clips[0].local, rig.clips[0].local) < 1e-6);
 }
 
-TEST_CASE("rig_load: several skins load into one rig; skins that disagree are refused by name",
+TEST_CASE("rig_load: several skins load into one rig, skins that disagree are refused by name",
           "[skinning][io]") {
   Rig rig = clip_capsule();
   Scratch dir("skins");
@@ -389,7 +389,7 @@ TEST_CASE("rig_load: units and axes: a rig scaled by 2^-10 and 2^10 and a z-up c
   }
 }
 
-TEST_CASE("rig_load: the shared rigs named by ISOKIT_SHARED_DATA load; jog.fbx plays on arnaud.fbx",
+TEST_CASE("rig_load: the shared rigs named by ISOKIT_SHARED_DATA load, jog.fbx plays on arnaud.fbx",
           "[skinning][io][samples]") {
   const char* folder = std::getenv("ISOKIT_SHARED_DATA");
   if (folder == nullptr) return;  // optional: only where the shared data folder exists
