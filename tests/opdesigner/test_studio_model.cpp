@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <random>
+#include <thread>
 
 #include "isokit/core/error.h"
 #include "isokit/operators/io.h"
@@ -322,6 +323,12 @@ TEST_CASE("studio: save, open, export and recent files", "[studio]") {
   CHECK(!other.can_undo());
   CHECK_THROWS_AS(other.open((dir / "missing.json").string()), InputError);
   CHECK(other.spec() == model.spec());
+  // open_file: the same model as open() on a placeholder, without the placeholder.
+  const std::unique_ptr<StudioModel> opened = StudioModel::open_file(spec_path, o);
+  CHECK(opened->spec() == model.spec());
+  CHECK(opened->document_path() == spec_path);
+  CHECK(!opened->modified());
+  CHECK_THROWS_AS(StudioModel::open_file((dir / "missing.json").string(), o), InputError);
   const RecentFiles reread((dir / "config" / "recent.json").string());
   REQUIRE(!reread.files().empty());
   CHECK(std::filesystem::equivalent(reread.files().front(), spec_path));
@@ -484,4 +491,55 @@ TEST_CASE("studio: recent files are most recent first, bounded, and survive a br
   CHECK(RecentFiles(path).files().empty());
   CHECK(RecentFiles("").files().empty());
   std::filesystem::remove_all(dir);
+}
+
+TEST_CASE("studio: the smallest grids (resolution 8, the edit band covers everything) work", "[studio]") {
+  for (int res : {8, 9, 12}) {
+    OperatorSpec spec = preset_spec("contact", res);
+    spec.slices = res;
+    INFO("resolution " << res);
+    StudioModel model(spec, test_options());
+    check_grid_is_generated(model);
+    model.set_d(0.5);
+    const CurvePoint end = contact_end(model);
+    const Point2 start = model.control_points(end.curve)[std::size_t(end.point)];
+    REQUIRE(model.begin_drag(end));
+    REQUIRE(model.drag_to({start[0] + 0.02, start[1]}));
+    check_displayed_is_current(model);
+    model.end_drag();
+    check_grid_is_generated(model);
+  }
+}
+
+TEST_CASE("studio: the background pauses during a drag and resumes after it", "[studio]") {
+  StudioModel model(small_spec("contact"), test_options());
+  model.wait_until_solved();
+  model.set_d(0.5);
+  const CurvePoint end = contact_end(model);
+  const Point2 start = model.control_points(end.curve)[std::size_t(end.point)];
+  REQUIRE(model.begin_drag(end));
+  for (int i = 1; i <= 3; ++i) REQUIRE(model.drag_to({start[0] + 0.01 * i, start[1]}));
+  const int queued = model.progress().total;
+  REQUIRE(queued > 10);
+  // Paused before the first slice of the job: nothing is published however long we wait.
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  model.poll();
+  CHECK(model.progress().done == 0);
+  CHECK(!model.fully_solved());
+  model.end_drag();  // resumes
+  const auto t0 = std::chrono::steady_clock::now();
+  while (!model.fully_solved() && std::chrono::steady_clock::now() - t0 < std::chrono::seconds(60)) {
+    model.poll();
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  CHECK(model.fully_solved());
+  check_grid_is_generated(model);
+  // wait_until_solved() during a drag does not hang: it lets the background run meanwhile.
+  REQUIRE(model.begin_drag(end));
+  REQUIRE(model.drag_to({start[0] + 0.04, start[1] + 0.01}));
+  model.wait_until_solved();
+  CHECK(model.fully_solved());
+  CHECK(model.dragging());
+  model.end_drag();
+  check_grid_is_generated(model);
 }

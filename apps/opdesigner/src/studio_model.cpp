@@ -213,6 +213,7 @@ void StudioModel::Impl::poll() {
 }
 
 void StudioModel::Impl::wait(const ProgressFn& progress) {
+  if (background) background->set_paused(false);  // paused by a drag: waiting needs it
   for (poll(); pending > 0; poll()) {
     if (progress) progress(pending_total - pending, pending_total);
     if (!background || background->idle()) {  // no thread, or its job failed: solve here (throws)
@@ -222,6 +223,7 @@ void StudioModel::Impl::wait(const ProgressFn& progress) {
     background->wait(std::chrono::milliseconds(20));
   }
   if (progress) progress(pending_total, pending_total);
+  if (background) background->set_paused(dragging);
 }
 
 // After an edit step: when a solve of the step left the edit band, builds generators around the
@@ -306,6 +308,13 @@ void StudioModel::new_document(OperatorSpec spec) {
   impl_ = std::move(fresh);
   document_path_.clear();
   saved_spec_ = impl_->spec;
+}
+
+std::unique_ptr<StudioModel> StudioModel::open_file(const std::string& path, StudioOptions options) {
+  auto model = std::make_unique<StudioModel>(operators::load_spec(path), std::move(options));
+  model->document_path_ = path;
+  model->recent_.add(path);
+  return model;
 }
 
 void StudioModel::open(const std::string& path) {
@@ -457,6 +466,7 @@ EditResult StudioModel::begin_drag(const CurvePoint& point) {
   m.drag_start = m.spec;
   m.drag_step = Step{};
   m.drag_step.before = m.spec;
+  if (m.background) m.background->set_paused(true);  // the drag's solves get the cores
   return {};
 }
 
@@ -481,6 +491,7 @@ void StudioModel::end_drag() {
   Impl& m = *impl_;
   if (!m.dragging) return;
   m.dragging = false;
+  if (m.background) m.background->set_paused(false);
   if (!m.moved) return;
   m.drag_step.after = m.spec;
   m.push(std::move(m.drag_step));

@@ -14,9 +14,11 @@
 /// curve, with its kind and type) before and after; the changed slices are queued. The displayed
 /// slice, if changed, is re-solved synchronously (`solve_edited`, Schur scheme inside
 /// `StudioOptions::edit_band_cells`), so it is current when the edit returns; the others are
-/// solved in the background. `fully_solved()` then `grid()` equals `generate()` of `spec()` up to
-/// rounding (≤ 1e-5). Save of the spec does not need the grid; export, undo and redo wait for
-/// the background first.
+/// solved in the background; while a point drag is in progress the background thread pauses
+/// at its next slice boundary (on 2 cores it would compete with the drag's solves) and resumes
+/// when the drag ends (or while `wait_until_solved()` waits). `fully_solved()` then `grid()` equals
+/// `generate()` of `spec()` up to rounding (≤ 1e-5). Save of the spec does not need the grid; export, undo
+/// and redo wait for the background first.
 ///
 /// Edit band: the generators precompute a band of `edit_band_cells` around the profile they
 /// were built for; a slice whose edited profile leaves it costs a numeric factorisation (~10x
@@ -50,6 +52,10 @@ class StudioModel {
   /// Validates `spec`, builds the generators and solves the first slice (d = 0) now, the others
   /// in the background. \throw isokit::InputError for an invalid spec.
   explicit StudioModel(OperatorSpec spec, StudioOptions options = {});
+  /// A model of the spec file at `path`, as `open(path)` leaves it (document path, recent file)
+  /// without building a placeholder document first. \throw isokit::InputError (load_spec's
+  /// message, or an invalid spec).
+  static std::unique_ptr<StudioModel> open_file(const std::string& path, StudioOptions options = {});
   ~StudioModel();
   StudioModel(const StudioModel&) = delete;
   StudioModel& operator=(const StudioModel&) = delete;
