@@ -122,9 +122,18 @@ class StudioModel {
   /// Moves the dragged point to `p` at the displayed d (see the file comment: keyframes,
   /// clamping, refusal); re-solves the displayed slice before returning.
   EditResult drag_to(const Point2& p);
-  /// Ends the drag; the step goes on the undo stack if anything moved.
+  /// Ends the drag (of a point or a knot); the step goes on the undo stack if anything moved.
   void end_drag();
+  /// True while a point drag (begin_drag) is in progress.
   bool dragging() const;
+  /// A drag of controller knot `i` (see move_knot): one undo step for the whole drag, like
+  /// begin_drag/drag_to/end_drag. Ends a drag in progress first; refused for a missing knot.
+  EditResult begin_knot_drag(int i);
+  /// Moves the dragged knot to (`alpha`, `d`) from where it was when the drag began (move_knot's
+  /// rules); a refused move leaves it at its last valid position. The grid does not change.
+  EditResult drag_knot_to(double alpha, double d);
+  /// True while a knot drag is in progress.
+  bool dragging_knot() const;
   /// Inserts a point after `segment` at parameter `t` of that segment, in every keyframe (so the
   /// profile at every d keeps its shape for polylines). Selects it.
   EditResult add_point(int curve, int segment, double t = 0.5);
@@ -160,6 +169,13 @@ class StudioModel {
   /// Publishes the slices the background finished. Call once per frame; cheap when idle.
   void poll();
   SolveProgress progress() const;
+  /// A counter increased by every change of the spec or the grid (an accepted edit or drag step,
+  /// undo, redo, a slice solved on this thread or published by poll(), a new document) and by
+  /// nothing else: redraw what depends on the document when it differs from the value drawn.
+  long revision() const;
+  /// The revision at which slice `k`'s values last changed (0: never written or no such slice);
+  /// a texture of the displayed slice is current while (slice(), slice_revision(slice())) is.
+  long slice_revision(int k) const;
   /// True when every slice is solved for the current spec (as of the last poll()).
   bool fully_solved() const;
   /// Polls until fully_solved(), calling `progress` between slices, then waits for a generator
