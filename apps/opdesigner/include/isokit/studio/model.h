@@ -108,7 +108,9 @@ class StudioModel {
   bool last_solve_was_schur() const;
 
   // ---- Selection.
-  /// The nearest control point within `radius` of `p` at the displayed d, if any.
+  /// The nearest control point within `radius` of `p` at the displayed d, if any. Points at the
+  /// same spot (e.g. at d = 0 the contact line's ends on the boundary corner) go to the
+  /// selected point, then its curve, then boundary curves.
   std::optional<CurvePoint> pick(const Point2& p, double radius) const;
   /// The nearest point of a control polygon within `radius` of `p` (for add_point).
   std::optional<SegmentPick> pick_segment(const Point2& p, double radius) const;
