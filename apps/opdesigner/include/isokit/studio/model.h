@@ -16,9 +16,9 @@
 /// `StudioOptions::edit_band_cells`), so it is current when the edit returns; the others are
 /// solved in the background; while a point drag is in progress the background thread pauses
 /// at its next slice boundary (on 2 cores it would compete with the drag's solves) and resumes
-/// when the drag ends (or while `wait_until_solved()` waits). `fully_solved()` then `grid()` equals
-/// `generate()` of `spec()` up to rounding (≤ 1e-5). Save of the spec does not need the grid; export, undo
-/// and redo wait for the background first.
+/// when the drag ends (or while `wait_until_solved()` waits). `fully_solved()` then `grid()`
+/// equals `generate()` of `spec()` up to rounding (≤ 1e-5). Save of the spec does not need the
+/// grid; export, undo and redo wait for the background first.
 ///
 /// Edit band: the generators precompute a band of `edit_band_cells` around the profile they
 /// were built for; a slice whose edited profile leaves it costs a numeric factorisation (~10x
