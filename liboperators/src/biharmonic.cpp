@@ -70,6 +70,7 @@ struct BiharmonicOperatorGenerator::Impl {
   std::vector<float> solve(Workspace& w, double d) const;
   std::vector<double> solve_refactor(Workspace& w, const Constraints& c) const;
   bool solve_schur(Workspace& w, const Constraints& c, std::vector<double>& x) const;
+  Eigen::MatrixXd solve_ff(Workspace& w, const Eigen::MatrixXd& rhs) const;
   std::vector<float> assemble(const std::vector<double>& xu) const;
 };
 
@@ -287,7 +288,7 @@ void BiharmonicOperatorGenerator::Impl::schur_complement(const SpMat& M_DD) {
     for (std::size_t blk = begin; blk < end; ++blk) {
       const int c0 = static_cast<int>(blk) * kBlock, bc = std::min(kBlock, ndyn - c0);
       rhs = Eigen::MatrixXd(M_FD.middleCols(c0, bc));
-      Z = w->ff->solve(rhs);
+      Z = solve_ff(*w, rhs);
       S.middleCols(c0, bc) -= M_FD.transpose() * Z;  // disjoint columns per task
     }
   });
@@ -305,7 +306,9 @@ void BiharmonicOperatorGenerator::Impl::invert_schur() {
 }
 
 void BiharmonicOperatorGenerator::Impl::prepare(Workspace& w, bool need_ff) const {
-  if (need_ff && !w.ff) {
+  // No free node (the band or the constraints cover every unknown, e.g. at resolution 8): there
+  // is no M_FF to factor, and sparse backends must not be handed an empty matrix.
+  if (need_ff && !w.ff && !F.empty()) {
     w.ff = detail::make_sparse_solver(use_cholmod);
     w.ff->analyze(M_FF);
     w.ff->factorize(M_FF);
@@ -315,6 +318,12 @@ void BiharmonicOperatorGenerator::Impl::prepare(Workspace& w, bool need_ff) cons
     w.A = K;
     w.refactor->analyze(w.A);
   }
+}
+
+/// M_FF⁻¹ rhs; with no free node (F empty) the result has no rows.
+Eigen::MatrixXd BiharmonicOperatorGenerator::Impl::solve_ff(Workspace& w, const Eigen::MatrixXd& rhs) const {
+  if (F.empty()) return Eigen::MatrixXd(0, rhs.cols());
+  return w.ff->solve(rhs);
 }
 
 std::vector<double> BiharmonicOperatorGenerator::Impl::solve_refactor(Workspace& w,
@@ -361,7 +370,7 @@ bool BiharmonicOperatorGenerator::Impl::solve_schur(Workspace& w, const Constrai
   Eigen::VectorXd bF(nf), bD(ndyn);
   for (int i = 0; i < nf; ++i) bF[i] = b[F[i]];
   for (int i = 0; i < ndyn; ++i) bD[i] = b[D[i]];
-  const Eigen::VectorXd y = w.ff->solve(bF);
+  const Eigen::VectorXd y = solve_ff(w, bF);
   const Eigen::VectorXd rD = bD - M_FD.transpose() * y;
   // Split D into constrained (known) and free.
   Eigen::VectorXd xD = Eigen::VectorXd::Zero(ndyn);
@@ -402,7 +411,7 @@ bool BiharmonicOperatorGenerator::Impl::solve_schur(Workspace& w, const Constrai
     for (int a = 0; a < m; ++a) xs += S_inv.col(fixed_d[a]) * lambda[a];
     for (int i : free_d) xD[i] = xs[i];  // constrained entries keep their exact values
   }
-  const Eigen::VectorXd xF = w.ff->solve(bF - M_FD * xD);
+  const Eigen::VectorXd xF = solve_ff(w, bF - M_FD * xD);
   x.assign(U, 0.0);
   for (int i = 0; i < nf; ++i) x[F[i]] = xF[i];
   for (int i = 0; i < ndyn; ++i) x[D[i]] = xD[i];

@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <random>
+#include <thread>
 
 #include "isokit/core/error.h"
 #include "isokit/operators/io.h"
@@ -322,6 +323,12 @@ TEST_CASE("studio: save, open, export and recent files", "[studio]") {
   CHECK(!other.can_undo());
   CHECK_THROWS_AS(other.open((dir / "missing.json").string()), InputError);
   CHECK(other.spec() == model.spec());
+  // open_file: the same model as open() on a placeholder, without the placeholder.
+  const std::unique_ptr<StudioModel> opened = StudioModel::open_file(spec_path, o);
+  CHECK(opened->spec() == model.spec());
+  CHECK(opened->document_path() == spec_path);
+  CHECK(!opened->modified());
+  CHECK_THROWS_AS(StudioModel::open_file((dir / "missing.json").string(), o), InputError);
   const RecentFiles reread((dir / "config" / "recent.json").string());
   REQUIRE(!reread.files().empty());
   CHECK(std::filesystem::equivalent(reread.files().front(), spec_path));
@@ -484,4 +491,182 @@ TEST_CASE("studio: recent files are most recent first, bounded, and survive a br
   CHECK(RecentFiles(path).files().empty());
   CHECK(RecentFiles("").files().empty());
   std::filesystem::remove_all(dir);
+}
+
+TEST_CASE("studio: the smallest grids (resolution 8, the edit band covers everything) work", "[studio]") {
+  for (int res : {8, 9, 12}) {
+    OperatorSpec spec = preset_spec("contact", res);
+    spec.slices = res;
+    INFO("resolution " << res);
+    StudioModel model(spec, test_options());
+    check_grid_is_generated(model);
+    model.set_d(0.5);
+    const CurvePoint end = contact_end(model);
+    const Point2 start = model.control_points(end.curve)[std::size_t(end.point)];
+    REQUIRE(model.begin_drag(end));
+    REQUIRE(model.drag_to({start[0] + 0.02, start[1]}));
+    check_displayed_is_current(model);
+    model.end_drag();
+    check_grid_is_generated(model);
+  }
+}
+
+TEST_CASE("studio: the background pauses during a drag and resumes after it", "[studio]") {
+  StudioModel model(small_spec("contact"), test_options());
+  model.wait_until_solved();
+  model.set_d(0.5);
+  const CurvePoint end = contact_end(model);
+  const Point2 start = model.control_points(end.curve)[std::size_t(end.point)];
+  REQUIRE(model.begin_drag(end));
+  for (int i = 1; i <= 3; ++i) REQUIRE(model.drag_to({start[0] + 0.01 * i, start[1]}));
+  const int queued = model.progress().total;
+  REQUIRE(queued > 10);
+  // Paused before the first slice of the job: nothing is published however long we wait.
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  model.poll();
+  CHECK(model.progress().done == 0);
+  CHECK(!model.fully_solved());
+  model.end_drag();  // resumes
+  const auto t0 = std::chrono::steady_clock::now();
+  while (!model.fully_solved() && std::chrono::steady_clock::now() - t0 < std::chrono::seconds(60)) {
+    model.poll();
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  CHECK(model.fully_solved());
+  check_grid_is_generated(model);
+  // wait_until_solved() during a drag does not hang: it lets the background run meanwhile.
+  REQUIRE(model.begin_drag(end));
+  REQUIRE(model.drag_to({start[0] + 0.04, start[1] + 0.01}));
+  model.wait_until_solved();
+  CHECK(model.fully_solved());
+  CHECK(model.dragging());
+  model.end_drag();
+  check_grid_is_generated(model);
+}
+
+TEST_CASE("studio: a knot drag is one undo step", "[studio]") {
+  StudioModel model(small_spec("contact"), test_options());
+  model.wait_until_solved();
+  const std::vector<float> grid = model.grid().data();
+  const auto knots = model.controller_knots();
+  REQUIRE(knots.size() >= 3);
+  const int i = 1;
+  const double a0 = knots[i].alpha, d0 = knots[i].d;
+  const double lo = knots[i - 1].alpha, hi = knots[i + 1].alpha;
+  CHECK(!model.drag_knot_to(a0, 0.5));  // no drag in progress
+  CHECK(!model.begin_knot_drag(int(knots.size())));
+  REQUIRE(model.begin_knot_drag(i));
+  CHECK(model.dragging_knot());
+  CHECK(!model.dragging());
+  for (int s = 1; s <= 10; ++s) {
+    const double a = a0 + (hi - a0) * 0.04 * s, d = std::clamp(d0 + 0.02 * s, 0.0, 1.0);
+    REQUIRE(model.drag_knot_to(a, d));
+    CHECK(model.controller_knots()[i].alpha == Approx(a));
+    CHECK(model.controller_knots()[i].d == Approx(d));
+  }
+  const auto moved = model.controller_knots();
+  CHECK(!model.drag_knot_to(hi + 0.01, 0.5));  // would pass the neighbour: refused, stays
+  CHECK(!model.drag_knot_to(lo - 0.01, 0.5));
+  CHECK(model.controller_knots()[i].alpha == moved[i].alpha);
+  model.end_drag();
+  CHECK(!model.dragging_knot());
+  CHECK(model.grid().data() == grid);  // the controller is not part of the grid
+  REQUIRE(model.can_undo());
+  REQUIRE(model.undo());
+  CHECK(!model.can_undo());  // ten moves, one step
+  CHECK(model.spec().controller_knots.empty());
+  CHECK(model.controller_knots()[i].alpha == a0);
+  REQUIRE(model.redo());
+  CHECK(model.controller_knots()[i].alpha == moved[i].alpha);
+  // A drag that moved nothing leaves no step; a point drag ends a knot drag.
+  REQUIRE(model.begin_knot_drag(i));
+  REQUIRE(model.begin_drag(contact_end(model)));
+  CHECK(!model.dragging_knot());
+  model.end_drag();
+  REQUIRE(model.undo());
+  CHECK(!model.can_undo());
+}
+
+TEST_CASE("studio: revision() changes exactly when the spec or the grid changes", "[studio]") {
+  StudioModel model(small_spec("contact"), test_options());
+  model.wait_until_solved();
+  long r = model.revision();
+  auto changed = [&] {
+    const long now = model.revision();
+    const bool c = now != r;
+    CHECK(now >= r);
+    r = now;
+    return c;
+  };
+  // Queries, selection, idle polls, refused edits and showing a solved slice change nothing.
+  model.poll();
+  (void)model.pick({0.5, 0.5}, 0.05);
+  model.select(CurvePoint{0, 1});
+  model.set_slice(5);
+  (void)model.live_check();
+  CHECK(!model.add_knot(4.0, 0.5));
+  CHECK(!model.delete_curve(0));
+  CHECK(!changed());
+  const long shown = model.slice_revision(5);
+  // An edit of the controller changes the spec only.
+  REQUIRE(model.add_knot(1.0, 0.3));
+  CHECK(changed());
+  CHECK(model.slice_revision(5) == shown);
+  REQUIRE(model.rename("renamed"));
+  CHECK(changed());
+  // A drag step: the displayed slice is re-solved now (its slice revision moves too).
+  const CurvePoint end = contact_end(model);
+  const Point2 start = model.control_points(end.curve)[std::size_t(end.point)];
+  REQUIRE(model.begin_drag(end));
+  CHECK(!changed());
+  REQUIRE(model.drag_to({start[0] + 0.01, start[1]}));
+  CHECK(changed());
+  CHECK(model.slice_revision(5) > shown);
+  model.end_drag();
+  // Background slices published by poll(): each poll that publishes changes it.
+  while (!model.fully_solved()) {
+    const int before = model.progress().done;
+    model.poll();
+    const bool published = model.fully_solved() || model.progress().done != before;
+    CHECK(changed() == published);
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  model.poll();
+  CHECK(!changed());
+  REQUIRE(model.undo());
+  CHECK(changed());
+  model.wait_until_solved();
+  changed();
+  REQUIRE(model.redo());
+  CHECK(changed());
+  model.new_document(small_spec("bulge"));
+  CHECK(changed());
+}
+
+TEST_CASE("studio: pick prefers the nearest point, then the selected curve, then boundary curves",
+          "[studio]") {
+  StudioModel model(small_spec("contact"), test_options());
+  model.set_d(0.0);
+  // At d = 0 the contact line has length 0: both its points lie on the boundary corner.
+  const Point2 corner = model.control_points(0)[1];
+  const auto contact = model.control_points(1);
+  REQUIRE(contact.size() == 2);
+  REQUIRE(std::hypot(contact[1][0] - corner[0], contact[1][1] - corner[1]) < 1e-9);
+  CHECK(model.pick(corner, 0.05) == std::optional<CurvePoint>(CurvePoint{0, 1}));
+  CHECK(model.pick({corner[0] + 0.01, corner[1] - 0.01}, 0.05) ==
+        std::optional<CurvePoint>(CurvePoint{0, 1}));
+  // The selected curve wins a tie (so the contact end can be dragged out of the corner) ...
+  model.select(CurvePoint{1, 1});
+  CHECK(model.pick(corner, 0.05) == std::optional<CurvePoint>(CurvePoint{1, 1}));
+  model.select(CurvePoint{1, 0});
+  CHECK(model.pick(corner, 0.05) == std::optional<CurvePoint>(CurvePoint{1, 0}));
+  // ... but never against a nearer point.
+  const Point2 other = model.control_points(0)[0];
+  CHECK(model.pick({other[0] + 0.001, other[1]}, 0.05) == std::optional<CurvePoint>(CurvePoint{0, 0}));
+  CHECK(!model.pick({corner[0] + 0.2, corner[1] + 0.2}, 0.05));
+  // Away from d = 0 the contact end is its own point and the nearest one is picked.
+  model.select(std::nullopt);
+  model.set_d(1.0);
+  const Point2 end = model.control_points(1)[1];
+  CHECK(model.pick(end, 0.02) == std::optional<CurvePoint>(CurvePoint{1, 1}));
 }

@@ -5,7 +5,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 
 #include "isokit/core/error.h"
 #include "isokit/core/math.h"
@@ -193,11 +192,10 @@ void Panels::handle_operator_input(FrameStats& stats) {
 
 void Panels::draw_slice_layers(ImDrawList* dl, FrameStats& stats) {
   const int nf = model_.spec().resolution;
-  const float* values = model_.slice_values();
-  const std::size_t n = static_cast<std::size_t>(nf) * nf;
-  if (shown_slice_.size() != n || std::memcmp(shown_slice_.data(), values, n * sizeof(float)) != 0) {
-    shown_slice_.assign(values, values + n);
-    const plot::ScalarGrid grid = slice_grid(values, nf);
+  const std::pair<int, long> key{model_.slice(), model_.slice_revision(model_.slice())};
+  if (key != shown_slice_) {
+    shown_slice_ = key;
+    const plot::ScalarGrid grid = slice_grid(model_.slice_values(), nf);
     slice_tex_.upload(colour_image(grid));
     slice_iso_ = decile_iso_lines(grid);
     stats.last_upload_frame = stats.frame;

@@ -158,13 +158,15 @@ void Panels::draw_controller_plot() {
     return std::nullopt;
   };
   if (ImGui::IsItemActivated() && ImGui::IsMouseDown(ImGuiMouseButton_Left)) {
-    dragged_knot_ = nearest();
-    if (!dragged_knot_) report(model_.add_knot(std::clamp(p[0], 0.0, kPi), std::clamp(p[1], 0.0, 1.0)));
+    if (const auto i = nearest())
+      report(model_.begin_knot_drag(*i));  // the whole drag is one undo step
+    else
+      report(model_.add_knot(std::clamp(p[0], 0.0, kPi), std::clamp(p[1], 0.0, 1.0)));
   }
-  if (dragged_knot_ && ImGui::IsItemActive() &&
+  if (model_.dragging_knot() && ImGui::IsItemActive() &&
       (ImGui::GetIO().MouseDelta.x != 0 || ImGui::GetIO().MouseDelta.y != 0))
-    report(model_.move_knot(*dragged_knot_, std::clamp(p[0], 0.0, kPi), std::clamp(p[1], 0.0, 1.0)));
-  if (!ImGui::IsItemActive()) dragged_knot_.reset();
+    report(model_.drag_knot_to(std::clamp(p[0], 0.0, kPi), std::clamp(p[1], 0.0, 1.0)));
+  if (model_.dragging_knot() && !ImGui::IsItemActive()) model_.end_drag();
   if (ImGui::IsItemHovered() && ImGui::IsMouseClicked(ImGuiMouseButton_Right))
     if (const auto i = nearest()) report(model_.delete_knot(*i));
   ImDrawList* dl = ImGui::GetWindowDrawList();
@@ -190,9 +192,8 @@ void Panels::draw_controller_plot() {
 void Panels::draw_preview() {
   float angle = float(angle_deg_);
   if (ImGui::SliderFloat("bend (deg)", &angle, 0.f, 180.f, "%.0f")) angle_deg_ = angle;
-  const SolveProgress progress = model_.progress();
-  const std::string key = operators::spec_to_json(model_.spec()) + fmt("|%.4f", angle_deg_) +
-                          std::to_string(progress.done) + (model_.fully_solved() ? "s" : "q");
+  // Recomposed when the document (spec or grid: model_.revision()) or the angle changed.
+  const std::pair<long, double> key{model_.revision(), angle_deg_};
   if (key != preview_key_) {
     opdesigner::ComposeOptions o;
     o.angle_deg = angle_deg_;

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "isokit/opdesigner/designer.h"
@@ -89,13 +90,12 @@ class Panels {
   GuiOptions options_;
   Layout layout_;
   Texture slice_tex_, preview_tex_;
-  std::vector<float> shown_slice_;  // values behind slice_tex_
+  std::pair<int, long> shown_slice_{-1, -1};  // slice and slice_revision behind slice_tex_
   std::vector<IsoLineSet> slice_iso_;
   opdesigner::ComposedField preview_;
   std::vector<IsoLineSet> preview_iso_;
-  std::string preview_key_;  // what preview_ was computed from
+  std::pair<long, double> preview_key_{-1, -1};  // revision and angle behind preview_
   double angle_deg_{120};
-  std::optional<int> dragged_knot_;
   std::string path_field_;
   std::string export_field_;
   enum class Pending { kNone, kUndo, kRedo, kSave, kExport };

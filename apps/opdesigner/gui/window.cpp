@@ -49,13 +49,7 @@ GLFWwindow* open_window(const GuiOptions& o) {
 std::unique_ptr<StudioModel> open_model(const GuiOptions& o) {
   StudioOptions so;
   if (o.recent_files != "default") so.recent_files_path = o.recent_files;
-  if (!o.spec_path.empty() && o.resolution <= 0) {
-    // open() records the document path and the recent file; start from a small spec (at 8 the
-    // edit band covers the whole grid and the banded generator's setup fails in CHOLMOD).
-    auto model = std::make_unique<StudioModel>(operators::preset_spec("clean-union", 32), so);
-    model->open(o.spec_path);
-    return model;
-  }
+  if (!o.spec_path.empty() && o.resolution <= 0) return StudioModel::open_file(o.spec_path, so);
   operators::OperatorSpec spec =
       o.spec_path.empty() ? operators::preset_spec(o.preset, 128) : operators::load_spec(o.spec_path);
   if (o.resolution > 0) spec.resolution = spec.slices = o.resolution;

@@ -55,7 +55,7 @@ EditResult refused(const std::string& why) {
 }  // namespace
 
 struct StudioModel::Impl {
-  Impl(OperatorSpec s, const StudioOptions& o);
+  Impl(OperatorSpec s, const StudioOptions& o, long first_revision = 0);
 
   // ---- state read by the GUI thread only
   StudioOptions options;
@@ -64,6 +64,8 @@ struct StudioModel::Impl {
   std::vector<char> solved;      // slice k holds generate(spec)'s values (up to rounding)
   std::vector<long> changed_at;  // generation of the last edit that changed slice k
   long generation{0};
+  long revision{0};                  // bumped by every change of spec or grid (StudioModel::revision)
+  std::vector<long> slice_rev;       // revision at which slice k's values last changed
   int pending{0}, pending_total{0};  // unsolved slices, and their number at the last post
   int slice{0};
   std::optional<CurvePoint> selection;
@@ -76,9 +78,10 @@ struct StudioModel::Impl {
   double last_ms{0};
   bool last_schur{false};
   std::optional<LiveCheck> check;
-  // drag in progress
-  bool dragging{false}, moved{false};
+  // drag in progress: a point (`dragging`) or a controller knot (`knot_dragging`)
+  bool dragging{false}, knot_dragging{false}, moved{false};
   CurvePoint drag_point;
+  int drag_knot{0};
   OperatorSpec drag_start;
   Step drag_step;
   // history
@@ -91,6 +94,8 @@ struct StudioModel::Impl {
   float* values(int k) { return grid.data().data() + static_cast<std::size_t>(k) * grid.nf() * grid.nf(); }
 
   void solve_now(int k);
+  void begin_step();
+  void wrote_slice(int k) { slice_rev[static_cast<std::size_t>(k)] = ++revision; }
   void mark_changed(const std::vector<int>& slices);
   void post_pending();
   void apply(OperatorSpec next, Step& step);
@@ -104,7 +109,8 @@ struct StudioModel::Impl {
   LiveCheck compute_check();
 };
 
-StudioModel::Impl::Impl(OperatorSpec s, const StudioOptions& o) : options(o), spec(std::move(s)) {
+StudioModel::Impl::Impl(OperatorSpec s, const StudioOptions& o, long first_revision)
+    : options(o), spec(std::move(s)), revision(first_revision) {
   require(options.undo_depth >= 1, "undo_depth", "must be at least 1", "keep one undo step or more");
   require(options.undo_memory_mib > 0, "undo_memory_mib", "must be positive", "give the memory in MiB");
   operators::validate(spec, "studio");
@@ -114,11 +120,20 @@ StudioModel::Impl::Impl(OperatorSpec s, const StudioOptions& o) : options(o), sp
       std::vector<float>(static_cast<std::size_t>(spec.slices) * spec.resolution * spec.resolution));
   solved.assign(static_cast<std::size_t>(spec.slices), 0);
   changed_at.assign(static_cast<std::size_t>(spec.slices), 0);
+  slice_rev.assign(static_cast<std::size_t>(spec.slices), 0);
   pending = spec.slices;
   if (options.background_thread)
     background = std::make_unique<detail::BackgroundSolver>(spec, generator_options(options));
   solve_now(0);
   post_pending();
+}
+
+// Starts an edit step made of several moves (a drag): they apply to `drag_start`.
+void StudioModel::Impl::begin_step() {
+  moved = false;
+  drag_start = spec;
+  drag_step = Step{};
+  drag_step.before = spec;
 }
 
 // Solves slice k of the current spec on this thread.
@@ -129,6 +144,7 @@ void StudioModel::Impl::solve_now(int k) {
   last_schur = generator->last_edit_was_schur();
   left_band |= !last_schur;
   std::memcpy(values(k), v.data(), v.size() * sizeof(float));
+  wrote_slice(k);
   if (!solved[static_cast<std::size_t>(k)]) --pending;
   solved[static_cast<std::size_t>(k)] = 1;
   if (k == slice) check.reset();
@@ -166,6 +182,7 @@ void StudioModel::Impl::apply(OperatorSpec next, Step& step) {
       save.before.assign(values(k), values(k) + static_cast<std::size_t>(grid.nf()) * grid.nf());
       save.before_valid = solved[static_cast<std::size_t>(k)] != 0;
     }
+  if (!(next == spec)) ++revision;
   spec = std::move(next);
   check.reset();
   mark_changed(changed);
@@ -206,6 +223,7 @@ void StudioModel::Impl::poll() {
     const auto k = static_cast<std::size_t>(r.slice);
     if (solved[k] || r.generation < changed_at[k]) continue;
     std::memcpy(values(r.slice), r.values.data(), r.values.size() * sizeof(float));
+    wrote_slice(r.slice);
     solved[k] = 1;
     --pending;
   }
@@ -213,6 +231,7 @@ void StudioModel::Impl::poll() {
 }
 
 void StudioModel::Impl::wait(const ProgressFn& progress) {
+  if (background) background->set_paused(false);  // paused by a drag: waiting needs it
   for (poll(); pending > 0; poll()) {
     if (progress) progress(pending_total - pending, pending_total);
     if (!background || background->idle()) {  // no thread, or its job failed: solve here (throws)
@@ -222,6 +241,7 @@ void StudioModel::Impl::wait(const ProgressFn& progress) {
     background->wait(std::chrono::milliseconds(20));
   }
   if (progress) progress(pending_total, pending_total);
+  if (background) background->set_paused(dragging);
 }
 
 // After an edit step: when a solve of the step left the edit band, builds generators around the
@@ -265,7 +285,11 @@ void StudioModel::Impl::swap_slices(Step& step, bool to_before) {
   spec = to_before ? step.before : step.after;
   check.reset();
   ++generation;
-  for (const int k : all) changed_at[static_cast<std::size_t>(k)] = generation;
+  ++revision;
+  for (const int k : all) {
+    changed_at[static_cast<std::size_t>(k)] = generation;
+    slice_rev[static_cast<std::size_t>(k)] = revision;
+  }
   for (const int k : requeue) {
     solved[static_cast<std::size_t>(k)] = 0;
     ++pending;
@@ -302,10 +326,18 @@ StudioModel::StudioModel(OperatorSpec spec, StudioOptions options)
 StudioModel::~StudioModel() = default;
 
 void StudioModel::new_document(OperatorSpec spec) {
-  auto fresh = std::make_unique<Impl>(std::move(spec), impl_->options);
+  // The revision keeps increasing across documents (a GUI keyed on it must redraw).
+  auto fresh = std::make_unique<Impl>(std::move(spec), impl_->options, impl_->revision + 1);
   impl_ = std::move(fresh);
   document_path_.clear();
   saved_spec_ = impl_->spec;
+}
+
+std::unique_ptr<StudioModel> StudioModel::open_file(const std::string& path, StudioOptions options) {
+  auto model = std::make_unique<StudioModel>(operators::load_spec(path), std::move(options));
+  model->document_path_ = path;
+  model->recent_.add(path);
+  return model;
 }
 
 void StudioModel::open(const std::string& path) {
@@ -403,7 +435,7 @@ bool StudioModel::last_solve_was_schur() const {
 // ---- selection
 
 std::optional<CurvePoint> StudioModel::pick(const Point2& p, double radius) const {
-  return detail::nearest_point(impl_->spec, d(), p, radius);
+  return detail::nearest_point(impl_->spec, d(), p, radius, impl_->selection);
 }
 
 std::optional<SegmentPick> StudioModel::pick_segment(const Point2& p, double radius) const {
@@ -451,12 +483,10 @@ EditResult StudioModel::begin_drag(const CurvePoint& point) {
     return refused("no control point " + std::to_string(point.point) + " on curve " +
                    std::to_string(point.curve));
   Impl& m = *impl_;
+  m.begin_step();
   m.dragging = true;
-  m.moved = false;
   m.drag_point = point;
-  m.drag_start = m.spec;
-  m.drag_step = Step{};
-  m.drag_step.before = m.spec;
+  if (m.background) m.background->set_paused(true);  // the drag's solves get the cores
   return {};
 }
 
@@ -479,8 +509,9 @@ EditResult StudioModel::drag_to(const Point2& p) {
 
 void StudioModel::end_drag() {
   Impl& m = *impl_;
-  if (!m.dragging) return;
-  m.dragging = false;
+  if (!m.dragging && !m.knot_dragging) return;
+  if (m.dragging && m.background) m.background->set_paused(false);
+  m.dragging = m.knot_dragging = false;
   if (!m.moved) return;
   m.drag_step.after = m.spec;
   m.push(std::move(m.drag_step));
@@ -489,6 +520,37 @@ void StudioModel::end_drag() {
 
 bool StudioModel::dragging() const {
   return impl_->dragging;
+}
+
+EditResult StudioModel::begin_knot_drag(int i) {
+  end_drag();
+  if (i < 0 || i >= int(controller_knots().size()))
+    return refused("no controller knot " + std::to_string(i) + " (the controller has " +
+                   std::to_string(controller_knots().size()) + ")");
+  Impl& m = *impl_;
+  m.begin_step();
+  m.knot_dragging = true;
+  m.drag_knot = i;
+  return {};
+}
+
+EditResult StudioModel::drag_knot_to(double alpha, double d) {
+  Impl& m = *impl_;
+  if (!m.knot_dragging) return refused("no knot drag in progress; call begin_knot_drag first");
+  OperatorSpec next;
+  try {
+    next = detail::set_knot(m.drag_start, m.drag_knot, alpha, d);
+    operators::validate(next, "knot drag");
+  } catch (const InputError& e) {
+    return refused(e.what());
+  }
+  m.apply(std::move(next), m.drag_step);
+  m.moved = true;
+  return {};
+}
+
+bool StudioModel::dragging_knot() const {
+  return impl_->knot_dragging;
 }
 
 EditResult StudioModel::add_point(int curve, int segment, double t) {
@@ -586,6 +648,14 @@ void StudioModel::poll() {
 SolveProgress StudioModel::progress() const {
   if (impl_->pending == 0) return {};
   return SolveProgress{impl_->pending_total - impl_->pending, impl_->pending_total};
+}
+
+long StudioModel::revision() const {
+  return impl_->revision;
+}
+long StudioModel::slice_revision(int k) const {
+  if (k < 0 || k >= impl_->spec.slices) return 0;
+  return impl_->slice_rev[static_cast<std::size_t>(k)];
 }
 
 bool StudioModel::fully_solved() const {

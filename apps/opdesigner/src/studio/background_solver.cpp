@@ -32,6 +32,14 @@ void BackgroundSolver::rebase(const operators::OperatorSpec& spec) {
   next_base_ = std::make_shared<const operators::OperatorSpec>(spec);
 }
 
+void BackgroundSolver::set_paused(bool paused) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    paused_ = paused;
+  }
+  wake_.notify_all();
+}
+
 std::vector<BackgroundSolver::Result> BackgroundSolver::take() {
   std::lock_guard<std::mutex> lock(mutex_);
   return std::exchange(outbox_, {});
@@ -78,7 +86,8 @@ bool BackgroundSolver::solve_job(const Job& job) {
   for (const int k : job.slices) {
     std::shared_ptr<const operators::OperatorSpec> rebase;
     {
-      std::lock_guard<std::mutex> lock(mutex_);
+      std::unique_lock<std::mutex> lock(mutex_);
+      wake_.wait(lock, [&] { return stop_ || !paused_; });  // a drag in progress: stand aside
       if (stop_ || has_job_) return true;
       rebase = std::exchange(next_base_, nullptr);
     }

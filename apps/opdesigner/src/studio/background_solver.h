@@ -38,6 +38,10 @@ class BackgroundSolver {
   /// Rebuilds the generator around `spec` before the next slice (its edit band follows the
   /// edited profile; see StudioModel).
   void rebase(const operators::OperatorSpec& spec);
+  /// Pauses the thread at the next slice boundary (the slice in progress finishes) until
+  /// `set_paused(false)`: a drag's synchronous solve then has the cores to itself. Posting,
+  /// rebasing and stopping still work while paused; `idle()` stays false while a job waits.
+  void set_paused(bool paused);
   /// The results finished since the last call.
   std::vector<Result> take();
   /// Blocks until a result is ready, the job is done, or `timeout` passes.
@@ -62,7 +66,7 @@ class BackgroundSolver {
   std::unique_ptr<operators::BiharmonicOperatorGenerator> generator_;  // worker thread only
   std::mutex mutex_;
   std::condition_variable wake_, done_;
-  bool stop_{false}, has_job_{false}, busy_{false};
+  bool stop_{false}, has_job_{false}, busy_{false}, paused_{false};
   Job job_;
   std::vector<Result> outbox_;
   std::string error_;

@@ -188,16 +188,27 @@ std::vector<int> changed_slices(const OperatorSpec& a, const OperatorSpec& b) {
   return out;
 }
 
-std::optional<CurvePoint> nearest_point(const OperatorSpec& spec, double d, const Point2& p, double radius) {
+std::optional<CurvePoint> nearest_point(const OperatorSpec& spec, double d, const Point2& p, double radius,
+                                        const std::optional<CurvePoint>& selected) {
+  constexpr double kTie = 1e-9;
+  auto rank = [&](int c, int i) {
+    if (selected && selected->curve == c) return selected->point == i ? 0 : 1;
+    return spec.curves[static_cast<std::size_t>(c)].kind == CurveKind::kBoundary ? 2 : 3;
+  };
   std::optional<CurvePoint> best;
-  double best_distance = radius;
+  double best_distance = 0;
+  int best_rank = 0;
   for (std::size_t c = 0; c < spec.curves.size(); ++c) {
     const std::vector<Point2> points = spec.curves[c].control_points(d);
-    for (std::size_t i = 0; i < points.size(); ++i)
-      if (const double e = distance(points[i], p); e <= best_distance) {
-        best_distance = e;
-        best = CurvePoint{int(c), int(i)};
-      }
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      const double e = distance(points[i], p);
+      if (e > radius) continue;
+      const int r = rank(int(c), int(i));
+      if (best && !(e < best_distance - kTie) && !(e <= best_distance + kTie && r < best_rank)) continue;
+      best = CurvePoint{int(c), int(i)};
+      best_distance = e;
+      best_rank = r;
+    }
   }
   return best;
 }

@@ -38,8 +38,13 @@ OperatorSpec remove_curve(OperatorSpec spec, int curve);
 /// control_points at the slice's d; all slices when the grid shape or slope differ).
 std::vector<int> changed_slices(const OperatorSpec& a, const OperatorSpec& b);
 
-/// Nearest control point / control-polygon point of any curve at `d` within `radius`.
-std::optional<CurvePoint> nearest_point(const OperatorSpec& spec, double d, const Point2& p, double radius);
+/// Nearest control point of any curve at `d` within `radius`. Points at the same distance (up
+/// to 1e-9; e.g. the contact line's ends on the boundary corner at d = 0) are ranked: the
+/// `selected` point, then other points of its curve, then boundary curves, then the rest; then
+/// the first in curve and point order.
+std::optional<CurvePoint> nearest_point(const OperatorSpec& spec, double d, const Point2& p, double radius,
+                                        const std::optional<CurvePoint>& selected = std::nullopt);
+/// Nearest control-polygon point of any curve at `d` within `radius`.
 std::optional<SegmentPick> nearest_segment(const OperatorSpec& spec, double d, const Point2& p,
                                            double radius);
 

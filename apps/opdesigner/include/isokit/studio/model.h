@@ -14,9 +14,11 @@
 /// curve, with its kind and type) before and after; the changed slices are queued. The displayed
 /// slice, if changed, is re-solved synchronously (`solve_edited`, Schur scheme inside
 /// `StudioOptions::edit_band_cells`), so it is current when the edit returns; the others are
-/// solved in the background. `fully_solved()` then `grid()` equals `generate()` of `spec()` up to
-/// rounding (≤ 1e-5). Save of the spec does not need the grid; export, undo and redo wait for
-/// the background first.
+/// solved in the background; while a point drag is in progress the background thread pauses
+/// at its next slice boundary (on 2 cores it would compete with the drag's solves) and resumes
+/// when the drag ends (or while `wait_until_solved()` waits). `fully_solved()` then `grid()`
+/// equals `generate()` of `spec()` up to rounding (≤ 1e-5). Save of the spec does not need the
+/// grid; export, undo and redo wait for the background first.
 ///
 /// Edit band: the generators precompute a band of `edit_band_cells` around the profile they
 /// were built for; a slice whose edited profile leaves it costs a numeric factorisation (~10x
@@ -50,6 +52,10 @@ class StudioModel {
   /// Validates `spec`, builds the generators and solves the first slice (d = 0) now, the others
   /// in the background. \throw isokit::InputError for an invalid spec.
   explicit StudioModel(OperatorSpec spec, StudioOptions options = {});
+  /// A model of the spec file at `path`, as `open(path)` leaves it (document path, recent file)
+  /// without building a placeholder document first. \throw isokit::InputError (load_spec's
+  /// message, or an invalid spec).
+  static std::unique_ptr<StudioModel> open_file(const std::string& path, StudioOptions options = {});
   ~StudioModel();
   StudioModel(const StudioModel&) = delete;
   StudioModel& operator=(const StudioModel&) = delete;
@@ -102,7 +108,9 @@ class StudioModel {
   bool last_solve_was_schur() const;
 
   // ---- Selection.
-  /// The nearest control point within `radius` of `p` at the displayed d, if any.
+  /// The nearest control point within `radius` of `p` at the displayed d, if any. Points at the
+  /// same spot (e.g. at d = 0 the contact line's ends on the boundary corner) go to the
+  /// selected point, then its curve, then boundary curves.
   std::optional<CurvePoint> pick(const Point2& p, double radius) const;
   /// The nearest point of a control polygon within `radius` of `p` (for add_point).
   std::optional<SegmentPick> pick_segment(const Point2& p, double radius) const;
@@ -116,9 +124,18 @@ class StudioModel {
   /// Moves the dragged point to `p` at the displayed d (see the file comment: keyframes,
   /// clamping, refusal); re-solves the displayed slice before returning.
   EditResult drag_to(const Point2& p);
-  /// Ends the drag; the step goes on the undo stack if anything moved.
+  /// Ends the drag (of a point or a knot); the step goes on the undo stack if anything moved.
   void end_drag();
+  /// True while a point drag (begin_drag) is in progress.
   bool dragging() const;
+  /// A drag of controller knot `i` (see move_knot): one undo step for the whole drag, like
+  /// begin_drag/drag_to/end_drag. Ends a drag in progress first; refused for a missing knot.
+  EditResult begin_knot_drag(int i);
+  /// Moves the dragged knot to (`alpha`, `d`) from where it was when the drag began (move_knot's
+  /// rules); a refused move leaves it at its last valid position. The grid does not change.
+  EditResult drag_knot_to(double alpha, double d);
+  /// True while a knot drag is in progress.
+  bool dragging_knot() const;
   /// Inserts a point after `segment` at parameter `t` of that segment, in every keyframe (so the
   /// profile at every d keeps its shape for polylines). Selects it.
   EditResult add_point(int curve, int segment, double t = 0.5);
@@ -154,6 +171,13 @@ class StudioModel {
   /// Publishes the slices the background finished. Call once per frame; cheap when idle.
   void poll();
   SolveProgress progress() const;
+  /// A counter increased by every change of the spec or the grid (an accepted edit or drag step,
+  /// undo, redo, a slice solved on this thread or published by poll(), a new document) and by
+  /// nothing else: redraw what depends on the document when it differs from the value drawn.
+  long revision() const;
+  /// The revision at which slice `k`'s values last changed (0: never written or no such slice);
+  /// a texture of the displayed slice is current while (slice(), slice_revision(slice())) is.
+  long slice_revision(int k) const;
   /// True when every slice is solved for the current spec (as of the last poll()).
   bool fully_solved() const;
   /// Polls until fully_solved(), calling `progress` between slices, then waits for a generator
