@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <numeric>
+#include <utility>
 
 #include "contact_smoothing.h"
 #include "field_eval.h"
@@ -122,93 +123,121 @@ void Projector2013::relax(const std::vector<Vec3f>& normals, float mu, Positions
   detail::from_points(out, positions);
 }
 
+namespace {
+
+/// The working arrays of one project() call.
+struct ProjectionBuffers {
+  explicit ProjectionBuffers(std::vector<Vec3f> initial)
+      : cur(std::move(initial)),
+        next(cur.size()),
+        grads(cur.size()),
+        normal(cur.size(), Vec3f{}),
+        batch(cur.size()),
+        values(cur.size()),
+        resid(cur.size(), 0.f),
+        fc(cur.size()),
+        done(cur.size(), 0),
+        live(cur.size()) {
+    for (std::size_t i = 0; i < live.size(); ++i) live[i] = static_cast<int>(i);
+  }
+  std::vector<Vec3f> cur, next, grads, normal, batch;
+  std::vector<float> values, resid;
+  std::vector<std::uint8_t> fc, done;
+  /// The vertices still projected: a vertex stopped at a contact or lost keeps its position for
+  /// the rest of the call, so its field is not evaluated again (the same result, fewer
+  /// evaluations). `batch` holds their positions, gathered per iteration.
+  std::vector<int> live;
+};
+
+/// One Newton step of every live vertex (2013 eq. 4, sign so that f moves toward iso with inward
+/// gradients); a vertex whose gradient turned by more than the contact angle stops (contact), one
+/// without a usable gradient is lost. The stopped vertices leave `live`.
+void newton_step(const FieldFunction& field, const ProjectorOptions& o, const std::vector<float>& iso,
+                 const std::vector<float>& max_step, VertexFlags& flags, ProjectionBuffers& s) {
+  const float cos_contact = std::cos(o.contact_angle_deg * kPiF / 180.f);
+  const float min_g2 = o.min_gradient * o.min_gradient;
+  s.next = s.cur;
+  parallel_for(s.live.size(), o.grain, [&](std::size_t b, std::size_t e) {
+    for (std::size_t k = b; k < e; ++k) s.batch[k] = s.cur[static_cast<std::size_t>(s.live[k])];
+    detail::eval_field(field, s.batch.data() + b, e - b, s.values.data() + b, s.grads.data() + b,
+                       s.fc.data() + b, 0);
+    for (std::size_t k = b; k < e; ++k) {
+      const auto i = static_cast<std::size_t>(s.live[k]);
+      const Vec3f g = s.grads[k];
+      const float value = s.values[k];
+      const float g2 = squared_norm(g);
+      if (!std::isfinite(value) || !detail::finite(g) || !(g2 > min_g2)) {
+        flags.lost[i] = 1;
+        continue;
+      }
+      const Vec3f nrm = g / std::sqrt(g2);
+      if (s.normal[i] != Vec3f{} && dot(nrm, s.normal[i]) < cos_contact) {
+        flags.contact[i] = 1;  // stopped at a gradient discontinuity
+        continue;
+      }
+      s.normal[i] = nrm;
+      s.resid[i] = std::abs(iso[i] - value);
+      s.done[i] = s.resid[i] <= o.tolerance;
+      Vec3f step = g * (o.sigma * (iso[i] - value) / g2);
+      const float len = norm(step);
+      if (len > max_step[i]) step = step * (max_step[i] / len);
+      s.next[i] = s.cur[i] + step;
+    }
+  });
+  s.cur.swap(s.next);
+  const auto stopped = [&](int i) {
+    return flags.contact[static_cast<std::size_t>(i)] || flags.lost[static_cast<std::size_t>(i)];
+  };
+  s.live.erase(std::remove_if(s.live.begin(), s.live.end(), stopped), s.live.end());
+}
+
+/// MVC tangential relaxation (2013 eq. 5, 6) of the vertices still projected, with the paper's
+/// μ(|f - iso|) unless ProjectorOptions::mu is set.
+void relaxation_step(const Adjacency& adj, const std::vector<float>& phi, const ProjectorOptions& o,
+                     const VertexFlags& flags, ProjectionBuffers& s) {
+  parallel_for(s.cur.size(), o.grain, [&](std::size_t b, std::size_t e) {
+    for (std::size_t i = b; i < e; ++i) {
+      s.next[i] = s.cur[i];
+      if (flags.contact[i] || flags.lost[i] || s.normal[i] == Vec3f{}) continue;
+      float mu = o.mu;
+      if (mu < 0.f) {
+        const float r = s.resid[i] - 1.f;
+        mu = std::max(0.f, 1.f - r * r * r * r);
+      }
+      s.next[i] = mvc_relaxed(adj, phi, s.cur, i, s.normal[i], mu);
+    }
+  });
+  s.cur.swap(s.next);
+}
+
+}  // namespace
+
 TrackStats Projector2013::project(const FieldFunction& field, Positions& positions) {
   const auto t0 = std::chrono::steady_clock::now();
   const std::size_t n = iso_.size();
   detail::validate_call(positions, n, field);
-  std::vector<Vec3f> cur = detail::to_points(positions, "initial positions");
-  std::vector<Vec3f> next(n), grads(n), normal(n, Vec3f{});
-  std::vector<float> values(n), resid(n, 0.f);
-  std::vector<std::uint8_t> fc(n), done(n, 0);
+  ProjectionBuffers s(detail::to_points(positions, "initial positions"));
   flags_.contact.assign(n, 0);
   flags_.lost.assign(n, 0);
-  const float cos_contact = std::cos(options_.contact_angle_deg * kPiF / 180.f);
-  const float min_g2 = options_.min_gradient * options_.min_gradient;
-  const std::size_t grain = options_.grain;
 
   TrackStats stats;
-  // The vertices still projected: a vertex stopped at a contact or lost keeps its position for
-  // the rest of the call, so its field is not evaluated again (the same result, fewer
-  // evaluations). `batch` holds their positions, gathered per iteration.
-  std::vector<int> live(n);
-  for (std::size_t i = 0; i < n; ++i) live[i] = static_cast<int>(i);
-  std::vector<Vec3f> batch(n);
   for (int it = 0; it < options_.max_iterations; ++it) {
-    // Newton step (2013 eq. 4, sign so that f moves toward iso with inward gradients).
-    next = cur;
-    parallel_for(live.size(), grain, [&](std::size_t b, std::size_t e) {
-      for (std::size_t k = b; k < e; ++k) batch[k] = cur[static_cast<std::size_t>(live[k])];
-      detail::eval_field(field, batch.data() + b, e - b, values.data() + b, grads.data() + b, fc.data() + b,
-                         0);
-      for (std::size_t k = b; k < e; ++k) {
-        const auto i = static_cast<std::size_t>(live[k]);
-        const Vec3f g = grads[k];
-        const float value = values[k];
-        const float g2 = squared_norm(g);
-        if (!std::isfinite(value) || !detail::finite(g) || !(g2 > min_g2)) {
-          flags_.lost[i] = 1;
-          continue;
-        }
-        const Vec3f nrm = g / std::sqrt(g2);
-        if (normal[i] != Vec3f{} && dot(nrm, normal[i]) < cos_contact) {
-          flags_.contact[i] = 1;  // stopped at a gradient discontinuity
-          continue;
-        }
-        normal[i] = nrm;
-        resid[i] = std::abs(iso_[i] - value);
-        done[i] = resid[i] <= options_.tolerance;
-        Vec3f step = g * (options_.sigma * (iso_[i] - value) / g2);
-        const float len = norm(step);
-        if (len > max_step_[i]) step = step * (max_step_[i] / len);
-        next[i] = cur[i] + step;
-      }
-    });
-    cur.swap(next);
-    live.erase(std::remove_if(live.begin(), live.end(),
-                              [&](int i) {
-                                return flags_.contact[static_cast<std::size_t>(i)] ||
-                                       flags_.lost[static_cast<std::size_t>(i)];
-                              }),
-               live.end());
+    newton_step(field, options_, iso_, max_step_, flags_, s);
     stats.iterations = it + 1;
     bool all = true;
-    for (std::size_t i = 0; i < n; ++i) all = all && (done[i] || flags_.contact[i] || flags_.lost[i]);
+    for (std::size_t i = 0; i < n; ++i) all = all && (s.done[i] || flags_.contact[i] || flags_.lost[i]);
     if (all) {
       stats.converged = true;
       break;
     }
-    if (it % 2 == 1) {
-      // MVC tangential relaxation after every pair of Newton steps (2013 eq. 5, 6).
-      parallel_for(n, grain, [&](std::size_t b, std::size_t e) {
-        for (std::size_t i = b; i < e; ++i) {
-          next[i] = cur[i];
-          if (flags_.contact[i] || flags_.lost[i] || normal[i] == Vec3f{}) continue;
-          float mu = options_.mu;
-          if (mu < 0.f) {
-            const float r = resid[i] - 1.f;
-            mu = std::max(0.f, 1.f - r * r * r * r);
-          }
-          next[i] = mvc_relaxed(adj_, phi_, cur, i, normal[i], mu);
-        }
-      });
-      cur.swap(next);
-    }
+    // A relaxation after every pair of Newton steps (2013 §5).
+    if (it % 2 == 1) relaxation_step(adj_, phi_, options_, flags_, s);
   }
   if (options_.max_iterations == 0) stats.converged = true;
   stats.smoothed_vertices =
-      detail::contact_smoothing(adj_, flags_.contact, options_.smoothing, grain, cur, flags_.beta);
-  detail::final_stats(field, cur, triangles_, iso_, grain, flags_, stats);
-  detail::from_points(cur, positions);
+      detail::contact_smoothing(adj_, flags_.contact, options_.smoothing, options_.grain, s.cur, flags_.beta);
+  detail::final_stats(field, s.cur, triangles_, iso_, options_.grain, flags_, stats);
+  detail::from_points(s.cur, positions);
   stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return stats;
 }

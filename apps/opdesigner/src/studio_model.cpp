@@ -162,13 +162,13 @@ void StudioModel::Impl::mark_changed(const std::vector<int>& slices) {
 
 // Hands every unsolved slice to the background, nearest to the displayed slice first.
 void StudioModel::Impl::post_pending() {
-  std::vector<int> todo;
+  std::vector<int> unsolved;
   for (int k = 0; k < spec.slices; ++k)
-    if (!solved[static_cast<std::size_t>(k)]) todo.push_back(k);
-  std::stable_sort(todo.begin(), todo.end(),
+    if (!solved[static_cast<std::size_t>(k)]) unsolved.push_back(k);
+  std::stable_sort(unsolved.begin(), unsolved.end(),
                    [&](int a, int b) { return std::abs(a - slice) < std::abs(b - slice); });
-  pending_total = int(todo.size());
-  if (background && !todo.empty()) background->post(generation, spec, std::move(todo));
+  pending_total = int(unsolved.size());
+  if (background && !unsolved.empty()) background->post(generation, spec, std::move(unsolved));
 }
 
 // Makes `next` (validated) the spec: records the changed slices' old values in `step`, solves
