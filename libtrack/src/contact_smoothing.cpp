@@ -29,9 +29,10 @@ void diffuse_beta(const Adjacency& adj, const std::vector<int>& region, int step
   }
 }
 
-// v_i <- (1 - β_i) v_i + β_i centroid(one-ring) over `region`, `steps` times (double-buffered).
+// v_i <- (1 - β_i) v_i + β_i (centroid(one-ring) + detail_i) over `region`, `steps` times
+// (double-buffered; no detail: 0).
 void smooth(const Adjacency& adj, const std::vector<int>& region, const std::vector<float>& beta, int steps,
-            std::size_t grain, std::vector<Vec3f>& pts) {
+            std::size_t grain, const Vec3f* detail, std::vector<Vec3f>& pts) {
   std::vector<Vec3f> buf(region.size());
   for (int s = 0; s < steps; ++s) {
     parallel_for(region.size(), grain, [&](std::size_t b, std::size_t e) {
@@ -42,7 +43,8 @@ void smooth(const Adjacency& adj, const std::vector<int>& region, const std::vec
           buf[a] = pts[i];
           continue;
         }
-        const Vec3f c = ring_centroid(adj, pts, i, deg);
+        Vec3f c = ring_centroid(adj, pts, i, deg);
+        if (detail) c += detail[i];
         buf[a] = pts[i] * (1.f - beta[i]) + c * beta[i];
       }
     });
@@ -50,11 +52,27 @@ void smooth(const Adjacency& adj, const std::vector<int>& region, const std::vec
   }
 }
 
+// Per vertex: its rest Laplacian coordinate turned by the target rotations, the mean of its edge
+// targets ½ (Ri + Rj)(pi - pj) (SmoothingOptions::keep_detail): centroid + detail is the vertex
+// itself for a rigidly moved rest shape.
+std::vector<Vec3f> rest_detail(const TrackState& s) {
+  const Adjacency& adj = s.m.adj;
+  std::vector<Vec3f> detail(s.n, Vec3f{});
+  for (std::size_t i = 0; i < s.n; ++i) {
+    const int deg = adj.degree(static_cast<int>(i));
+    if (deg == 0) continue;
+    Vec3f d{};
+    for (int k = adj.offsets[i]; k < adj.offsets[i + 1]; ++k) d += s.targets[static_cast<std::size_t>(k)];
+    detail[i] = d / static_cast<float>(deg);
+  }
+  return detail;
+}
+
 }  // namespace
 
 int contact_smoothing(const Adjacency& adj, const std::vector<std::uint8_t>& contact,
                       const SmoothingOptions& options, std::size_t grain, std::vector<Vec3f>& pts,
-                      std::vector<float>& beta) {
+                      std::vector<float>& beta, const Vec3f* detail) {
   const std::size_t n = pts.size();
   beta.assign(n, 0.f);
   // β is 0 beyond beta_diffusion_steps rings of the contact vertices: only that region is
@@ -71,7 +89,7 @@ int contact_smoothing(const Adjacency& adj, const std::vector<std::uint8_t>& con
   // Contact vertices keep β = 1 (2013: "β = 1 for vertices stopped at a gradient discontinuity").
   for (int i : region)
     if (contact[i]) beta[i] = 1.f;
-  smooth(adj, region, beta, options.smoothing_steps, grain, pts);
+  smooth(adj, region, beta, options.smoothing_steps, grain, detail, pts);
   int count = 0;
   for (int i : region) count += beta[i] > 0.f ? 1 : 0;
   return count;
@@ -79,8 +97,10 @@ int contact_smoothing(const Adjacency& adj, const std::vector<std::uint8_t>& con
 
 void smooth_contacts(TrackState& s) {
   const TrackerOptions& o = s.m.options;
-  s.stats.smoothed_vertices =
-      contact_smoothing(s.m.adj, s.flags.contact, o.smoothing, o.grain, s.cur, s.flags.beta);
+  std::vector<Vec3f> detail;
+  if (o.smoothing.keep_detail) detail = rest_detail(s);
+  s.stats.smoothed_vertices = contact_smoothing(s.m.adj, s.flags.contact, o.smoothing, o.grain, s.cur,
+                                                s.flags.beta, detail.empty() ? nullptr : detail.data());
   if (o.smoothing.smoothing_steps > 0)
     for (std::size_t i = 0; i < s.n; ++i)
       if (s.flags.beta[i] > 0.f) s.touched[i] = 1;

@@ -13,10 +13,13 @@
 namespace isokit::track::detail {
 
 /// Diffuses β from the contact flags and applies the Laplacian smoothing (double-buffered).
-/// Returns the number of vertices with β > 0.
+/// With `detail` (one vector per vertex: the tracker's rest Laplacian coordinates turned by the
+/// target rotations, SmoothingOptions::keep_detail), each step goes toward the one-ring centroid
+/// plus the vertex's detail; without, toward the centroid (2013 eq. 7). Returns the number of
+/// vertices with β > 0.
 int contact_smoothing(const Adjacency& adj, const std::vector<std::uint8_t>& contact,
                       const SmoothingOptions& options, std::size_t grain, std::vector<Vec3f>& pts,
-                      std::vector<float>& beta);
+                      std::vector<float>& beta, const Vec3f* detail = nullptr);
 
 /// The one-ring centroid of vertex i (deg > 0), summed in neighbour order.
 inline Vec3f ring_centroid(const Adjacency& adj, const std::vector<Vec3f>& pts, int i, int deg) {

@@ -8,6 +8,7 @@
 #include "isokit/core/error.h"
 #include "isokit/core/mesh_quality.h"
 #include "isokit/core/parallel.h"
+#include "mesh_geometry.h"
 #include "points.h"
 
 namespace isokit::track {
@@ -61,6 +62,29 @@ std::vector<std::uint8_t> inverted_triangles(const FieldFunction& field, const s
   }
   std::vector<std::uint8_t> out(nf, 0);
   test_inverted(field, pts, triangles, *candidates, grain, out);
+  return out;
+}
+
+std::vector<std::uint8_t> free_vertices(const FieldFunction& field, const std::vector<Vec3f>& rest,
+                                        const Triangles& triangles, const TrackerOptions& options) {
+  const std::size_t n = rest.size();
+  std::vector<std::uint8_t> out(n, 0);
+  if (options.free_vertex_angle_deg >= 180.f) return out;
+  std::vector<float> values(n);
+  std::vector<Vec3f> grads(n);
+  std::vector<std::uint8_t> contact(n);
+  eval_field(field, rest.data(), n, values.data(), grads.data(), contact.data(), options.grain);
+  const std::vector<Vec3f> normals = area_weighted_normals(rest, triangles);
+  const float cos_max = std::cos(options.free_vertex_angle_deg * kPiF / 180.f);
+  const float min_g2 = options.min_gradient * options.min_gradient;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vec3f& g = grads[i];
+    const float n2 = squared_norm(normals[i]), g2 = squared_norm(g);
+    if (!(n2 > 0.f)) continue;  // no triangle: nothing to compare with
+    // Inward normal -n against the inward field direction g: cos = -n·g / (|n| |g|).
+    const bool usable = finite(g) && g2 > min_g2;
+    out[i] = !usable || -dot(normals[i], g) < cos_max * std::sqrt(n2 * g2) ? 1 : 0;
+  }
   return out;
 }
 

@@ -9,6 +9,7 @@
 #include "isokit/core/math.h"
 #include "isokit/track/field.h"
 #include "isokit/track/mesh.h"
+#include "isokit/track/tracker_options.h"
 
 namespace isokit::track::detail {
 
@@ -31,5 +32,12 @@ void test_inverted(const FieldFunction& field, const std::vector<Vec3f>& pts, co
 std::vector<std::uint8_t> inverted_triangles(const FieldFunction& field, const std::vector<Vec3f>& pts,
                                              const Triangles& triangles, std::size_t grain,
                                              const std::vector<int>* candidates = nullptr);
+
+/// Per vertex: 1 if the field at the rest positions `rest` does not locate the vertex
+/// (TrackerOptions::free_vertex_angle_deg): its inward direction ∇f/|∇f| is more than that angle
+/// from the inward area-weighted vertex normal, or |∇f| ≤ min_gradient or not finite. A vertex
+/// without triangles is never free; with the angle at 180 none is.
+std::vector<std::uint8_t> free_vertices(const FieldFunction& field, const std::vector<Vec3f>& rest,
+                                        const Triangles& triangles, const TrackerOptions& options);
 
 }  // namespace isokit::track::detail

@@ -19,6 +19,7 @@ struct JacobiTerms {
   const float* wsum;
   const Vec3f* nrms;
   const std::uint8_t* contact;
+  const std::uint8_t* free;  // free vertices: 3D steps (TrackerOptions::free_vertex_angle_deg)
 };
 
 inline JacobiTerms jacobi_terms(const TrackState& s) {
@@ -30,19 +31,21 @@ inline JacobiTerms jacobi_terms(const TrackState& s) {
   t.wsum = s.m.weight_sum.data();
   t.nrms = s.normal.data();
   t.contact = s.flags.contact.data();
+  t.free = s.flags.free.data();
   return t;
 }
 
 /// Tangential ARAP displacement of vertex i at `p` (Jacobi, neighbours fixed at `cu`), before the
 /// mask: δ = Σ wij ((p̂j - p̂i) + ½ (Ri + Rj)(pi - pj)) / Σ wij, restricted to the current tangent
 /// plane except at contact vertices, whose gradient direction is meaningless on the contact
-/// valley (full 3D step, damped). Summed per edge, so that p̂ = p with Ri = I gives exactly δ = 0.
+/// valley (full 3D step, damped), and at free vertices, which the field does not locate (full 3D
+/// step). Summed per edge, so that p̂ = p with Ri = I gives exactly δ = 0.
 inline Vec3f jacobi_delta(const JacobiTerms& t, const Vec3f* cu, std::size_t i, const Vec3f& p) {
   Vec3f acc{};
   for (int k = t.off[i]; k < t.off[i + 1]; ++k) acc += ((cu[t.nb[k]] - p) + t.tg[k]) * t.w[k];
   Vec3f d = acc / t.wsum[i];
   const Vec3f nrm = t.nrms[i];
-  if (!t.contact[i]) d = d - nrm * dot(d, nrm);
+  if (!t.contact[i] && !t.free[i]) d = d - nrm * dot(d, nrm);
   return d;
 }
 
@@ -55,7 +58,8 @@ inline bool relaxes(const TrackState& s, const JacobiTerms& t, std::size_t i) {
 /// damping. Chebyshev semi-iteration (omega != 1, on a smooth part of the field):
 /// x_{k+1} = x_{k-1} + ω (x̂_{k+1} - x_{k-1}), i.e. the Jacobi target plus (ω - 1) times its
 /// distance to x_{k-1}; that momentum is kept in the tangent plane (the Newton step handles the
-/// normal direction) and scaled like the step.
+/// normal direction; a free vertex, without Newton steps, keeps all of it) and scaled like the
+/// step.
 inline Vec3f jacobi_target(const TrackState& s, const JacobiTerms& t, const Vec3f* cu, const Vec3f* pv,
                            std::size_t i, const Vec3f& p) {
   const Vec3f nrm = t.nrms[i];
@@ -63,7 +67,7 @@ inline Vec3f jacobi_target(const TrackState& s, const JacobiTerms& t, const Vec3
   Vec3f q = p + jacobi_delta(t, cu, i, p) * scale;
   if (s.omega != 1.f && s.linear[i]) {
     const Vec3f mom = q - pv[i];
-    q += (mom - nrm * dot(mom, nrm)) * ((s.omega - 1.f) * scale);
+    q += (t.free[i] ? mom : mom - nrm * dot(mom, nrm)) * ((s.omega - 1.f) * scale);
   }
   return q;
 }

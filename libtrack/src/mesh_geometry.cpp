@@ -3,6 +3,8 @@
 
 #include <algorithm>
 
+#include "isokit/core/mesh_quality.h"
+
 namespace isokit::track::detail {
 
 std::vector<float> mean_edge_lengths(const std::vector<Vec3f>& rest, const Adjacency& adj) {
@@ -79,6 +81,16 @@ void grow_rings(const Adjacency& adj, int rings, std::vector<int>& region, std::
         if (!in[adj.neighbors[k]]) in[adj.neighbors[k]] = 1, region.push_back(adj.neighbors[k]);
     begin = end;
   }
+}
+
+std::vector<Vec3f> area_weighted_normals(const std::vector<Vec3f>& pts, const Triangles& triangles) {
+  std::vector<Vec3f> out(pts.size(), Vec3f{});
+  for (Eigen::Index f = 0; f < triangles.rows(); ++f) {
+    const int a = triangles(f, 0), b = triangles(f, 1), c = triangles(f, 2);
+    const Vec3f nf = triangle_normal(pts[a], pts[b], pts[c]);
+    out[a] += nf, out[b] += nf, out[c] += nf;
+  }
+  return out;
 }
 
 }  // namespace isokit::track::detail

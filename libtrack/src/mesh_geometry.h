@@ -25,6 +25,10 @@ void cotangent_weights(const std::vector<Vec3f>& rest, const Triangles& triangle
 /// Triangles around each vertex, in CSR form (`neighbors` holds triangle indices).
 Adjacency vertex_faces(const Triangles& triangles, std::size_t num_vertices);
 
+/// Per vertex: the sum of its triangles' normals `(b - a) x (c - a)` (area-weighted, outward for
+/// counter-clockwise triangles; not normalised, 0 for a vertex without triangles).
+std::vector<Vec3f> area_weighted_normals(const std::vector<Vec3f>& pts, const Triangles& triangles);
+
 /// Appends to `region` the vertices within `rings` rings of it (breadth first); `in` flags members.
 void grow_rings(const Adjacency& adj, int rings, std::vector<int>& region, std::vector<std::uint8_t>& in);
 

@@ -14,8 +14,10 @@
 namespace isokit::track::detail {
 
 /// The Newton step of vertex i for the gradient g (|g|² = g2) and the residual r = iso - f,
-/// scaled by its contact damping and overshoot scale, at most `max_step` long.
+/// scaled by its contact damping and overshoot scale, at most `max_step` long; none for a free
+/// vertex (TrackerOptions::free_vertex_angle_deg: not held to its iso-value).
 inline Vec3f newton_step(const TrackState& s, std::size_t i, const Vec3f& g, float g2, float r) {
+  if (s.flags.free[i]) return Vec3f{};
   Vec3f step = g * (s.m.options.sigma * s.damping[i] * s.newton_scale[i] * r / g2);
   const float len2 = squared_norm(step);
   const float max_step = s.m.max_step[i];
@@ -71,7 +73,7 @@ inline void newton_update(TrackState& s, std::size_t i, float f, const Vec3f& g,
   const bool seen = s.normal[i] != Vec3f{};
   const float turn = dot(nrm, s.normal[i]);  // cosine of the turn since the last evaluation
   s.linear[i] = seen && turn >= s.cos_linear ? 1 : 0;
-  if (seen && turn < s.cos_contact) {
+  if (seen && turn < s.cos_contact && !s.flags.free[i]) {  // a free vertex's gradient says nothing
     if (o.angle_contacts) s.flags.contact[i] = 1;
     s.damping[i] = std::max(s.damping[i] * 0.5f, o.min_contact_damping);
   }

@@ -22,6 +22,7 @@ class CgRelaxation final : public RelaxationStrategy {
     problem_.targets = s.targets.data();
     problem_.normals = s.normal.data();
     problem_.free3d = s.flags.contact.data();
+    problem_.free_vertices = s.flags.free.data();
     problem_.scale = scale_.data();
     problem_.tolerance = s.tol;
     problem_.max_iterations = s.m.options.cg_max_iterations;

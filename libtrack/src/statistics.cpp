@@ -20,10 +20,15 @@ void vertex_stats(const std::vector<float>& values, const std::vector<float>& is
   float mx = 0.f;
   stats.contact_vertices = 0;
   stats.lost_vertices = 0;
+  stats.free_vertices = 0;
+  const bool with_free = !flags.free.empty();
   for (std::size_t i = 0; i < values.size(); ++i) {
     stats.contact_vertices += flags.contact[i];
     stats.lost_vertices += flags.lost[i];
-    if (flags.contact[i] || flags.lost[i] || flags.beta[i] > 0.f || !std::isfinite(values[i])) continue;
+    const bool free = with_free && flags.free[i];
+    stats.free_vertices += free ? 1 : 0;
+    if (free || flags.contact[i] || flags.lost[i] || flags.beta[i] > 0.f || !std::isfinite(values[i]))
+      continue;
     const float r = std::abs(values[i] - iso[i]);
     mx = std::max(mx, r);
     sum += r;

@@ -11,8 +11,8 @@
 
 namespace isokit::track::detail {
 
-/// Contact / lost counts and iso residuals over the vertices with β == 0 that are neither contact
-/// nor lost and have a finite value.
+/// Contact / lost / free counts and iso residuals over the vertices with β == 0 that are neither
+/// contact, lost nor free (`flags.free` may be empty: none) and have a finite value.
 void vertex_stats(const std::vector<float>& values, const std::vector<float>& iso, const VertexFlags& flags,
                   TrackStats& stats);
 

@@ -11,10 +11,10 @@ namespace isokit::track::detail {
 namespace {
 
 // The unknowns are 3D displacements filtered per vertex by S_i = I - n_i n_iᵀ (tangent plane) or
-// S_i = I (free vertex): CG on S K S stays in the filtered subspace when every vector it builds is
+// S_i = I (contact or free vertex): CG on S K S stays in the filtered subspace when every vector it builds is
 // filtered (Baraff & Witkin's filtered PCG), so no tangent frames are needed.
 inline Vec3f filter(const TangentProblem& p, std::size_t i, const Vec3f& v) {
-  if (p.free3d[i]) return v;
+  if (p.free3d[i] || (p.free_vertices && p.free_vertices[i])) return v;
   const Vec3f n = p.normals[i];
   return v - n * dot(v, n);
 }

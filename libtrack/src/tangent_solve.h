@@ -14,7 +14,8 @@ namespace isokit::track::detail {
 /// The tangential ARAP system of one relaxation step (2014 §5.2, solved instead of one Jacobi
 /// sweep): unknown displacements d_i of the listed vertices, the others held in place,
 /// `(Σj wij / s_i) d_i - Σ_{j unknown} wij dj = Σj wij ((pj - pi) + tij)`, each row and d_i
-/// restricted to the tangent plane of `normals[i]` unless `free3d[i]`. Per-vertex arrays are
+/// restricted to the tangent plane of `normals[i]` unless `free3d[i]` (a contact vertex) or
+/// `free_vertices[i]` (not held to its iso-value; may be null). Per-vertex arrays are
 /// indexed by vertex, `weights` and `targets` by directed edge.
 struct TangentProblem {
   const Adjacency* adj{nullptr};
@@ -24,6 +25,7 @@ struct TangentProblem {
   const Vec3f* positions{nullptr};
   const Vec3f* normals{nullptr};
   const std::uint8_t* free3d{nullptr};
+  const std::uint8_t* free_vertices{nullptr};
   const float* scale{nullptr};  ///< s_i in (0, 1]: mask × damping
   float tolerance{0};           ///< stop when every |r_i| / diag_i is below this (a Jacobi step)
   int max_iterations{100};

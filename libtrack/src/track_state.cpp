@@ -71,6 +71,7 @@ TrackState::TrackState(const TrackerModel& model, const FieldFunction& f, const 
       active(set.all()) {
   flags.contact.assign(n, 0);
   flags.lost.assign(n, 0);
+  flags.free = model.free;
   for (std::size_t i = 0; i < radius2.size(); ++i) radius2[i] = std::min(4.f * tol2, m.lazy_r2[i]);
 }
 

@@ -45,6 +45,7 @@ struct TrackerModel {
   std::vector<float> lazy_r2;               // squared lazy evaluation radius bound per vertex
   float diagonal{0};                        // rest bounding-box diagonal
   std::vector<std::uint8_t> rest_inverted;  // per triangle (empty: none recorded)
+  std::vector<std::uint8_t> free;           // per vertex: free vertex (set_rest_field; all 0 before)
   // Outputs of the last call.
   VertexFlags flags;                        // caller's order
   std::vector<std::uint8_t> last_inverted;  // per triangle, at the end of the last call

@@ -59,6 +59,7 @@ IsoSurfaceTracker::IsoSurfaceTracker(const Positions& rest, const Triangles& tri
     m.lazy_r2[i] = 2.f * m.options.tolerance * m.diagonal * m.max_step[i];
   for (float& s : m.max_step) s *= m.options.max_step;
   m.mask.assign(pts.size(), 1.f);
+  m.free.assign(pts.size(), 0);
   m.vertex_faces = detail::vertex_faces(m.triangles, pts.size());
 }
 
@@ -138,6 +139,12 @@ void IsoSurfaceTracker::mark_rest_inversions(const FieldFunction& rest_field) {
   m.rest_inverted = detail::inverted_triangles(rest_field, m.rest, m.triangles, m.options.grain);
 }
 
+void IsoSurfaceTracker::set_rest_field(const FieldFunction& rest_field) {
+  mark_rest_inversions(rest_field);
+  detail::TrackerModel& m = *model_;
+  m.free = detail::free_vertices(rest_field, m.rest, m.triangles, m.options);
+}
+
 namespace {
 
 // The call's results back to the model and the caller: the inverted flags for the next call's
@@ -154,6 +161,7 @@ void finish(detail::TrackState& s, detail::TrackerModel& m, Positions& positions
     m.flags.contact = detail::permuted(m.flags.contact, m.rank);
     m.flags.lost = detail::permuted(m.flags.lost, m.rank);
     m.flags.beta = detail::permuted(m.flags.beta, m.rank);
+    m.flags.free = detail::permuted(m.flags.free, m.rank);
   }
   detail::from_points(cur, positions);
 }

@@ -104,6 +104,10 @@ void validate_options(const TrackerOptions& o) {
           "must be > 0", "use e.g. 1e-6");
   require(o.contact_angle_deg > 0.f && o.contact_angle_deg <= 180.f, "TrackerOptions::contact_angle_deg",
           "must be in (0, 180]", "use 55 (2013)");
+  require(o.free_vertex_angle_deg > 0.f && o.free_vertex_angle_deg <= 180.f,
+          "TrackerOptions::free_vertex_angle_deg",
+          "must be in (0, 180] (got " + format_number(o.free_vertex_angle_deg) + ")",
+          "use 60 (the default) or 180 (every vertex tracked, 2014)");
   require(std::isfinite(o.min_contact_damping) && o.min_contact_damping > 0.f && o.min_contact_damping <= 1.f,
           "TrackerOptions::min_contact_damping",
           "must be in (0, 1] (got " + format_number(o.min_contact_damping) + ")", "use e.g. 0.25");

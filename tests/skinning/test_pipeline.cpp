@@ -317,6 +317,7 @@ TEST_CASE("setup: the paper preset turns every isokit addition off, later keys o
   CHECK(d.tracker.lazy_evaluation);
   CHECK(d.tracker.min_contact_damping < 1.f);
   CHECK(d.tracker.fold_contacts);
+  CHECK(d.tracker.free_vertex_angle_deg < 180.f);
   CHECK(d.tracker.fold_repair.rounds > 0);
   CHECK(d.tracker.orientation_repair.rounds > 0);
   CHECK(d.axis_guard);
@@ -328,6 +329,8 @@ TEST_CASE("setup: the paper preset turns every isokit addition off, later keys o
   CHECK(!p.tracker.lazy_evaluation);
   CHECK(p.tracker.min_contact_damping == 1.f);
   CHECK(!p.tracker.fold_contacts);
+  CHECK(p.tracker.free_vertex_angle_deg == 180.f);
+  CHECK(!p.tracker.smoothing.keep_detail);
   CHECK(p.tracker.fold_repair.rounds == 0);
   CHECK(p.tracker.orientation_repair.rounds == 0);
   CHECK(p.tracker.smoothing.beta_diffusion_steps == 2);
@@ -346,13 +349,16 @@ TEST_CASE("setup: the paper preset turns every isokit addition off, later keys o
   // One addition back on top of the preset (an ablation row), and the new tracker keys.
   const SkinSetup one = setup_from_json(
       R"({"preset": "paper", "tracker": {"fold_repair_rounds": 8, "chebyshev_rho": 0.9, "active_set": true,
-          "min_contact_damping": 0.5, "fold_contacts": true}})",
+          "min_contact_damping": 0.5, "fold_contacts": true, "free_vertex_angle_deg": 75,
+          "smoothing_keep_detail": true}})",
       "s.json");
   CHECK(one.tracker.fold_repair.rounds == 8);
   CHECK(one.tracker.chebyshev_rho == 0.9f);
   CHECK(one.tracker.active_set);
   CHECK(one.tracker.min_contact_damping == 0.5f);
   CHECK(one.tracker.fold_contacts);
+  CHECK(one.tracker.free_vertex_angle_deg == 75.f);
+  CHECK(one.tracker.smoothing.keep_detail);
   CHECK(!one.axis_guard);
   CHECK(setup_from_json(R"({"preset": "isokit"})", "s.json").tracker.active_set);
   CHECK_THROWS_WITH(setup_from_json(R"({"preset": "2014"})", "s.json"),
@@ -361,6 +367,10 @@ TEST_CASE("setup: the paper preset turns every isokit addition off, later keys o
                     Catch::Contains("s.json.tracker.chebyshev_rho"));
   CHECK_THROWS_WITH(setup_from_json(R"({"tracker": {"min_contact_damping": 0}})", "s.json"),
                     Catch::Contains("s.json.tracker.min_contact_damping"));
+  for (const char* bad :
+       {R"({"tracker": {"free_vertex_angle_deg": 0}})", R"({"tracker": {"free_vertex_angle_deg": 181}})"})
+    CHECK_THROWS_WITH(setup_from_json(bad, "s.json"),
+                      Catch::Contains("s.json.tracker.free_vertex_angle_deg") && Catch::Contains("(0, 180]"));
 }
 
 TEST_CASE("pipeline: tracker calls per frame and the calls stopped at the iteration cap",

@@ -21,11 +21,6 @@ using isokit::test::capsule_mesh;
 
 namespace {
 
-float smoothstep(float a, float b, float x) {
-  const float t = std::clamp((x - a) / (b - a), 0.f, 1.f);
-  return t * t * (3.f - 2.f * t);
-}
-
 /// Elbow driver: per step, the previous result moves rigidly with its nearest bone (rest y > 0:
 /// bone 2), rotations are the bones' blended rotations (smooth weights across the joint).
 struct Elbow {
@@ -39,19 +34,9 @@ struct Elbow {
     P = mesh.V;
     iso = sample_iso_values(field.function(), mesh.V);
   }
-  std::vector<Mat3f> rotations() const {
-    std::vector<Mat3f> r(static_cast<std::size_t>(mesh.V.rows()));
-    for (Eigen::Index i = 0; i < mesh.V.rows(); ++i)
-      r[static_cast<std::size_t>(i)] = test::rot_z(angle * smoothstep(-0.3f, 0.3f, mesh.V(i, 1)));
-    return r;
-  }
+  std::vector<Mat3f> rotations() const { return test::ZLimb::rotations(mesh.V, angle); }
   TrackStats step(IsoSurfaceTracker& tracker, float to) {
-    const Mat3f d = test::rot_z(to - angle);
-    for (Eigen::Index i = 0; i < P.rows(); ++i)
-      if (mesh.V(i, 1) > 0.f) {
-        const Vec3f q = d * Vec3f{P(i, 0), P(i, 1), P(i, 2)};
-        P.row(i) << q.x, q.y, q.z;
-      }
+    test::ZLimb::turn_upper(mesh.V, to - angle, P);
     angle = to;
     field.set_angle(to);
     return tracker.track(field.function(), rotations(), P);
@@ -728,6 +713,11 @@ TEST_CASE("tracker: bad input is rejected naming the item", "[track][tracker][er
   o.min_contact_damping = 0.f;
   CHECK_THROWS_WITH(IsoSurfaceTracker(m.V, m.F, iso, o), Catch::Contains("min_contact_damping"));
   o = TrackerOptions{};
+  for (float bad_angle : {0.f, 181.f, std::nanf("")}) {
+    o.free_vertex_angle_deg = bad_angle;
+    CHECK_THROWS_WITH(IsoSurfaceTracker(m.V, m.F, iso, o), Catch::Contains("free_vertex_angle_deg"));
+  }
+  o = TrackerOptions{};
   o.cg_rings = 0;
   CHECK_THROWS_WITH(IsoSurfaceTracker(m.V, m.F, iso, o), Catch::Contains("cg_rings"));
   o = TrackerOptions{};
@@ -749,6 +739,7 @@ TEST_CASE("tracker: bad input is rejected naming the item", "[track][tracker][er
   P(7, 0) = std::nanf("");
   CHECK_THROWS_WITH(t.track(sphere, {}, P), Catch::Contains("initial positions vertex 7"));
   CHECK_THROWS_AS(t.track(FieldFunction{}, {}, P), InputError);
+  CHECK_THROWS_WITH(t.set_rest_field(FieldFunction{}), Catch::Contains("rest field"));
 }
 
 TEST_CASE("tracker: vertices outside the support or with NaN fields stay put, no NaNs",

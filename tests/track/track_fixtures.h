@@ -145,4 +145,28 @@ inline float diagonal(const track::Positions& v) {
   return (v.colwise().maxCoeff() - v.colwise().minCoeff()).norm();
 }
 
+/// Two-bone limb along y, jointed at the origin about z (the tracker tests' elbow drivers): the
+/// rest vertices above y = 0 belong to the upper bone.
+struct ZLimb {
+  /// Per vertex: the rotation by `angle` about z, blended from 0 below y = -0.3 to 1 above
+  /// y = 0.3 (smoothstep), as skinning weights across the joint would.
+  static std::vector<Mat3f> rotations(const track::Positions& rest, float angle) {
+    std::vector<Mat3f> r(static_cast<std::size_t>(rest.rows()));
+    for (Eigen::Index i = 0; i < rest.rows(); ++i) {
+      const float t = std::clamp((rest(i, 1) + 0.3f) / 0.6f, 0.f, 1.f);
+      r[static_cast<std::size_t>(i)] = rot_z(angle * t * t * (3.f - 2.f * t));
+    }
+    return r;
+  }
+  /// Stage 1 of a step: the upper bone's vertices of `P` turn rigidly by `delta` about z.
+  static void turn_upper(const track::Positions& rest, float delta, track::Positions& P) {
+    const Mat3f d = rot_z(delta);
+    for (Eigen::Index i = 0; i < P.rows(); ++i)
+      if (rest(i, 1) > 0.f) {
+        const Vec3f q = d * Vec3f{P(i, 0), P(i, 1), P(i, 2)};
+        P.row(i) << q.x, q.y, q.z;
+      }
+  }
+};
+
 }  // namespace isokit::test

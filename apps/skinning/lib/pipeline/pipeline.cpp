@@ -179,9 +179,9 @@ void check_poses(const Rig& rig, const std::vector<Pose>& poses) {
             "one local transform per joint");
 }
 
-/// The 2014 tracker on the rest mesh (2014 §5): iso-values sampled at rest, triangles inverted at
-/// rest recorded, the per-joint relaxation mask (2014 Fig. 11) and the fold-repair mask of parts
-/// too small for its smoothing (docs/skinning.md, "Low-poly rigs").
+/// The 2014 tracker on the rest mesh (2014 §5): iso-values sampled at rest, the rest field given
+/// (triangles inverted at rest, free vertices), the per-joint relaxation mask (2014 Fig. 11) and the
+/// fold-repair mask of parts too small for its smoothing (docs/skinning.md, "Low-poly rigs").
 std::unique_ptr<track::IsoSurfaceTracker> make_tracker(const Skinner& sk, const SkinField& field,
                                                        std::size_t grain) {
   const Rig& rig = sk.rig();
@@ -192,7 +192,7 @@ std::unique_ptr<track::IsoSurfaceTracker> make_tracker(const Skinner& sk, const 
   track::TrackerOptions to = setup.tracker;
   to.grain = grain;
   auto tracker = std::make_unique<track::IsoSurfaceTracker>(rig.rest, rig.triangles, std::move(iso), to);
-  tracker->mark_rest_inversions(field.function());
+  tracker->set_rest_field(field.function());
   std::vector<float> mask(static_cast<std::size_t>(nv));
   for (int v = 0; v < nv; ++v) mask[v] = setup.relaxation_for(rig.joints[partition[v]].name);
   tracker->set_relaxation_mask(std::move(mask));
@@ -312,12 +312,15 @@ FrameMetrics measure_frame(Skinner& sk, const Pose& pose, const track::Positions
                            const BakeOptions& options, const std::vector<std::uint8_t>* contact,
                            const track::IsoSurfaceTracker* tracker) {
   // The iso residual leaves out the method's contact vertices and, with the tracker, the vertices
-  // it smoothed (β > 0).
+  // it smoothed (β > 0) and its free vertices (not held to their iso-values).
   std::vector<std::uint8_t> excluded;
   if (contact) {
     excluded = *contact;
-    if (tracker)
-      for (std::size_t v = 0; v < excluded.size(); ++v) excluded[v] |= tracker->flags().beta[v] > 0 ? 1 : 0;
+    if (tracker) {
+      const track::VertexFlags& fl = tracker->flags();
+      for (std::size_t v = 0; v < excluded.size(); ++v)
+        excluded[v] |= fl.beta[v] > 0 || (!fl.free.empty() && fl.free[v]) ? 1 : 0;
+    }
   }
   return sk.measure(pose, pos, options.self_intersections, contact ? &excluded : nullptr);
 }

@@ -319,7 +319,9 @@ void read_tracker(const json& t, const std::string& w, SkinSetup& s) {
               "chebyshev_rho",
               "active_set",
               "min_contact_damping",
-              "fold_contacts"},
+              "fold_contacts",
+              "free_vertex_angle_deg",
+              "smoothing_keep_detail"},
              w);
   std::string relaxation = "jacobi";
   read(t, "relaxation", relaxation, w);
@@ -348,6 +350,12 @@ void read_tracker(const json& t, const std::string& w, SkinSetup& s) {
               s.tracker.min_contact_damping <= 1.f,
           w + ".min_contact_damping", "must be in (0, 1]", "use 0.25 (the default) or 1 (no damping)");
   read(t, "fold_contacts", s.tracker.fold_contacts, w);
+  read(t, "free_vertex_angle_deg", s.tracker.free_vertex_angle_deg, w);
+  require(std::isfinite(s.tracker.free_vertex_angle_deg) && s.tracker.free_vertex_angle_deg > 0.f &&
+              s.tracker.free_vertex_angle_deg <= 180.f,
+          w + ".free_vertex_angle_deg", "must be in (0, 180]",
+          "use 60 (the default) or 180 (every vertex held to its iso-value, 2014)");
+  read(t, "smoothing_keep_detail", s.tracker.smoothing.keep_detail, w);
   read_tracker_repairs(t, w, s);
 }
 
@@ -395,6 +403,7 @@ void apply_paper_preset(SkinSetup& s) {
   t.fold_repair.rounds = 0;
   t.orientation_repair.rounds = 0;
   t.smoothing = {2, 3};
+  t.free_vertex_angle_deg = 180.f;
   s.axis_guard = false;
   s.bulge_gate = false;
   s.substeps.paper_rule = true;

@@ -42,12 +42,13 @@ struct TrackStats {
   long solver_iterations{0};  ///< CG iterations summed over the relaxation (Relaxation::kConjugateGradient)
   bool converged{false};      ///< largest move fell under the tolerance before the iteration cap
   float max_move{0};          ///< largest vertex move in the last iteration
-  float max_residual{0};      ///< max |f(v) - iso_v| over vertices outside the smoothed contact region
-  float mean_residual{0};     ///< mean of the same
+  float max_residual{0};   ///< max |f(v) - iso_v| over vertices outside the smoothed contact region, not free
+  float mean_residual{0};  ///< mean of the same
   int contact_vertices{0};    ///< vertices flagged by the field or stopped by the gradient-angle rule
   int smoothed_vertices{0};   ///< vertices with diffused beta > 0 (moved by contact smoothing)
   int oriented_vertices{0};   ///< vertices moved by the orientation repair (2014 tracker)
   int lost_vertices{0};       ///< zero / non-finite gradient: left in place (e.g. outside the support)
+  int free_vertices{0};       ///< not held to their iso-value (VertexFlags::free; 2014 tracker)
   int inverted_triangles{0};  ///< triangles whose normal points along +∇f at their centroid
   double seconds{0};          ///< wall time of the call
 };
@@ -57,6 +58,9 @@ struct VertexFlags {
   std::vector<std::uint8_t> contact;  ///< 1 = contact vertex
   std::vector<std::uint8_t> lost;     ///< 1 = no usable gradient, left in place
   std::vector<float> beta;            ///< diffused smoothing weight in [0, 1]
+  /// 1 = free vertex: the field at rest does not locate it (TrackerOptions::free_vertex_angle_deg),
+  /// so it is not held to its iso-value (2014 tracker; empty for the 2013 projector).
+  std::vector<std::uint8_t> free;
 };
 
 /// Counts triangles whose normal `(b - a) x (c - a)` points along `+∇f` at the centroid

@@ -74,6 +74,13 @@ class IsoSurfaceTracker {
   /// in every call). \throw InputError for an empty field.
   void mark_rest_inversions(const FieldFunction& rest_field);
 
+  /// Tells the tracker the field at the rest pose: records the rest inversions
+  /// (`mark_rest_inversions`) and finds the free vertices, where the field disagrees with the rest
+  /// mesh (TrackerOptions::free_vertex_angle_deg: the field's inward direction at the rest
+  /// position against the inward area-weighted vertex normal); see `flags().free`. Without this
+  /// call every vertex is held to its iso-value. \throw InputError for an empty field.
+  void set_rest_field(const FieldFunction& rest_field);
+
   /// Tracks the field from `positions` (in: initial guess, out: result).
   /// \param rotations `#V` target rotations Ri, or empty for identity.
   /// \throw InputError for wrong sizes or non-finite positions / rotations.

@@ -16,6 +16,14 @@ struct SmoothingOptions {
   int beta_diffusion_steps{2};
   /// Steps of v <- (1 - β) v + β centroid(one-ring) (count; default 3, the tracker uses 5).
   int smoothing_steps{3};
+  /// Smooth toward the one-ring centroid plus the vertex's rest Laplacian coordinate turned by
+  /// the ARAP target rotations (`mean_j ½ (Ri + Rj)(pi - pj)`), so that a rigidly moved rest
+  /// shape is left in place (true; 2014 tracker only, which has the target rotations), or toward
+  /// the centroid alone (false, the default: 2013 eq. 7, which moves a vertex of a coarse mesh by
+  /// up to an edge even at rest). Not in the papers; off by default because it keeps skin in real
+  /// contacts from flattening (measured on the real rigs: docs/tracking.md, step 4 "Keeping the
+  /// rest detail").
+  bool keep_detail{false};
 };
 
 /// Fold repair after the contact smoothing (not in the papers; docs/tracking.md, step 5 "Fold
@@ -90,6 +98,14 @@ struct TrackerOptions {
   /// Contact smoothing (2013 §5 eq. 7; default 3 β-diffusion and 5 smoothing steps, the 2013
   /// projector keeps 2 and 3: docs/tracking.md, "Deviations", smoothing step counts).
   SmoothingOptions smoothing{3, 5};
+  /// Free vertices: a vertex where the field at rest disagrees with the rest mesh — the field's
+  /// inward direction ∇f/|∇f| at its rest position is more than this angle away from the inward
+  /// vertex normal, or ∇f is not usable there — is not held to its iso-value: no Newton step, a
+  /// relaxation step in 3D instead of the tangent plane, no gradient-angle contact; the ARAP
+  /// relaxation carries it with its neighbours (degrees, in (0, 180]; default 60; 180 = every
+  /// vertex tracked, as in 2014; not in the papers; docs/tracking.md, "Free vertices"). Takes
+  /// effect once the tracker knows the rest field (IsoSurfaceTracker::set_rest_field).
+  float free_vertex_angle_deg{60.0f};
   /// Largest task of the parallel loops (vertices; default 1024; 0 = serial). Results do not
   /// depend on it.
   std::size_t grain{1024};

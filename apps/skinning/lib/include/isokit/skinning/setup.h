@@ -163,7 +163,8 @@ JointOperator joint_operator_from_string(const std::string& s, const std::string
 /// `fit.closure` joints, `fit.max_error` 0, `fit.capsule_match` 0; tracker: `chebyshev_rho` 0
 /// (plain Jacobi), `active_set` false, `lazy_evaluation` false, `min_contact_damping` 1 (no
 /// contact damping), `fold_contacts` false, fold repair and orientation repair 0 rounds, contact
-/// smoothing 2 β-diffusion and 3 smoothing steps (2013 §5), `axis_guard` false; operators:
+/// smoothing 2 β-diffusion and 3 smoothing steps (2013 §5), `free_vertex_angle_deg` 180 (every
+/// vertex held to its iso-value), `axis_guard` false; operators:
 /// `bulge_gate` false; sub-steps: the 2014 rule without `fold_rule`. Kept as they are, because
 /// the papers give no value or the code has no paper-only path: the iteration cap (100) and
 /// tolerance, the 10 initial Newton steps, the Newton step clamp (`max_step`), the cotangent
