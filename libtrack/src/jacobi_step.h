@@ -58,16 +58,17 @@ inline bool relaxes(const TrackState& s, const JacobiTerms& t, std::size_t i) {
 /// damping. Chebyshev semi-iteration (omega != 1, on a smooth part of the field):
 /// x_{k+1} = x_{k-1} + ω (x̂_{k+1} - x_{k-1}), i.e. the Jacobi target plus (ω - 1) times its
 /// distance to x_{k-1}; that momentum is kept in the tangent plane (the Newton step handles the
-/// normal direction; a free vertex, without Newton steps, keeps all of it) and scaled like the
-/// step.
+/// normal direction) and scaled like the step. A free vertex, without Newton steps to damp the
+/// momentum's normal part, takes the plain Jacobi step (with it, spikes of 3 – 4 edges grew on
+/// the ninja's Attack2: docs/tracking.md, "Free vertices").
 inline Vec3f jacobi_target(const TrackState& s, const JacobiTerms& t, const Vec3f* cu, const Vec3f* pv,
                            std::size_t i, const Vec3f& p) {
   const Vec3f nrm = t.nrms[i];
   const float scale = s.m.mask[i] * s.damping[i];
   Vec3f q = p + jacobi_delta(t, cu, i, p) * scale;
-  if (s.omega != 1.f && s.linear[i]) {
+  if (s.omega != 1.f && s.linear[i] && !t.free[i]) {
     const Vec3f mom = q - pv[i];
-    q += (t.free[i] ? mom : mom - nrm * dot(mom, nrm)) * ((s.omega - 1.f) * scale);
+    q += (mom - nrm * dot(mom, nrm)) * ((s.omega - 1.f) * scale);
   }
   return q;
 }

@@ -317,7 +317,6 @@ TEST_CASE("setup: the paper preset turns every isokit addition off, later keys o
   CHECK(d.tracker.lazy_evaluation);
   CHECK(d.tracker.min_contact_damping < 1.f);
   CHECK(d.tracker.fold_contacts);
-  CHECK(d.tracker.free_vertex_angle_deg < 180.f);
   CHECK(d.tracker.fold_repair.rounds > 0);
   CHECK(d.tracker.orientation_repair.rounds > 0);
   CHECK(d.axis_guard);

@@ -101,11 +101,12 @@ struct TrackerOptions {
   /// Free vertices: a vertex where the field at rest disagrees with the rest mesh — the field's
   /// inward direction ∇f/|∇f| at its rest position is more than this angle away from the inward
   /// vertex normal, or ∇f is not usable there — is not held to its iso-value: no Newton step, a
-  /// relaxation step in 3D instead of the tangent plane, no gradient-angle contact; the ARAP
-  /// relaxation carries it with its neighbours (degrees, in (0, 180]; default 60; 180 = every
-  /// vertex tracked, as in 2014; not in the papers; docs/tracking.md, "Free vertices"). Takes
-  /// effect once the tracker knows the rest field (IsoSurfaceTracker::set_rest_field).
-  float free_vertex_angle_deg{60.0f};
+  /// plain Jacobi relaxation step in 3D instead of the tangent plane, no gradient-angle contact;
+  /// the ARAP relaxation carries it with its neighbours (degrees, in (0, 180]; default 180 = off,
+  /// every vertex tracked as in 2014; 60 is the value measured in docs/tracking.md, "Free
+  /// vertices"; not in the papers). Takes effect once the tracker knows the rest field
+  /// (IsoSurfaceTracker::set_rest_field).
+  float free_vertex_angle_deg{180.0f};
   /// Largest task of the parallel loops (vertices; default 1024; 0 = serial). Results do not
   /// depend on it.
   std::size_t grain{1024};
