@@ -12,6 +12,7 @@
 #include "isokit/implicit/skeleton.h"
 #include "isokit/operators/biharmonic.h"
 #include "isokit/operators/controller.h"
+#include "isokit/operators/grid_operator.h"
 #include "isokit/skinning/deform.h"
 #include "isokit/skinning/grid_operators.h"
 #include "isokit/track/mesh.h"
@@ -21,19 +22,27 @@ namespace isokit::skinning {
 namespace {
 
 /// The node operator of `joint`, and its tag's role (2014: bulge joints form bulge pairs); a
-/// grid operator's controller goes to `controller`.
+/// grid operator's controller goes to `controller`. The 2013 blend is sampled into `blend_grid`
+/// on first use when SkinSetup::blend_grid is set (one grid for every blend joint).
 implicit::JointSetup joint_setup(const std::string& joint, JointOperator op, const SkinSetup& setup,
-                                 TreeKind kind, const Progress& progress, operators::Controller& controller) {
+                                 TreeKind kind, const Progress& progress, operators::Controller& controller,
+                                 std::shared_ptr<const operators::GridOperator>& blend_grid) {
   implicit::JointSetup js;
   switch (op) {
     case JointOperator::kUnion:
       js.op = implicit::NodeOperator::max();
       js.role = implicit::NodeRole::Union;
       break;
-    case JointOperator::kBlend:
-      js.op = implicit::NodeOperator::gradient_blend(operators::Controller::preset("blend2013"));
+    case JointOperator::kBlend: {
+      const operators::Controller blend = operators::Controller::preset("blend2013");
+      if (setup.blend_grid && !blend_grid)
+        blend_grid = std::make_shared<const operators::GridOperator>(
+            operators::sampled_gradient_blend_2013(setup.operator_resolution, setup.operator_slices));
+      js.op = setup.blend_grid ? implicit::NodeOperator::grid_operator(blend_grid, blend, "blend2013")
+                               : implicit::NodeOperator::gradient_blend(blend);
       js.role = implicit::NodeRole::Blend;
       break;
+    }
     case JointOperator::kBulge:
     case JointOperator::kContact:
     case JointOperator::kAuto: {
@@ -87,6 +96,7 @@ SkinField::Skeleton SkinField::compressed_skeleton(const SkinSetup& setup, const
   const int nj = static_cast<int>(r.joints.size());
   std::vector<int> index(static_cast<std::size_t>(nj), -1);
   Skeleton sk;
+  std::shared_ptr<const operators::GridOperator> blend_grid;  // sampled on first use
   for (int j = 0; j < nj; ++j) {
     const BonePart& b = fitted_->bones()[j];
     if (!b.fitted) continue;
@@ -100,7 +110,7 @@ SkinField::Skeleton SkinField::compressed_skeleton(const SkinSetup& setup, const
     const JointOperator op = setup.operator_for(name, kind_);
     joint_ops_.push_back(name + ": " + describe_joint_operator(setup, name, op));
     operators::Controller controller = operators::Controller::preset(setup.bulge_controller);
-    sk.joints.push_back(joint_setup(name, op, setup, kind_, progress, controller));
+    sk.joints.push_back(joint_setup(name, op, setup, kind_, progress, controller, blend_grid));
     leaf_controllers_.push_back(controller);
   }
   hang_roots_under_first(sk.parts.parent);

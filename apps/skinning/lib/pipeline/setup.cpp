@@ -244,13 +244,14 @@ void read_fit(const json& f, const std::string& w, implicit::PartFitOptions& fit
 /// Section `operators`: grid operators and their controllers.
 void read_operators(const json& o, const std::string& w, const std::string& base_dir, SkinSetup& s) {
   check_keys(o,
-             {"resolution", "slices", "bulge_gate", "contact_controller", "bulge_controller", "contact_spec",
-              "bulge_spec"},
+             {"resolution", "slices", "bulge_gate", "blend_grid", "contact_controller", "bulge_controller",
+              "contact_spec", "bulge_spec"},
              w);
   if (o.contains("contact_spec")) s.contact_spec = read_spec_file(o, "contact_spec", w, base_dir);
   if (o.contains("bulge_spec")) s.bulge_spec = read_spec_file(o, "bulge_spec", w, base_dir);
   read(o, "resolution", s.operator_resolution, w);
   read(o, "bulge_gate", s.bulge_gate, w);
+  read(o, "blend_grid", s.blend_grid, w);
   read(o, "contact_controller", s.contact_controller, w);
   read(o, "bulge_controller", s.bulge_controller, w);
   const std::vector<std::string> presets = operators::Controller::preset_names();

@@ -19,6 +19,7 @@
 #pragma once
 
 #include <cstddef>
+#include <functional>
 #include <vector>
 
 #include "isokit/core/hostdev.h"
@@ -158,5 +159,13 @@ class GridOperator {
   int nd_{0}, nf_{0};
   std::vector<float> data_;
 };
+
+/// Samples an operator given by its value `g(f1, f2, d)` onto an `nd × nf × nf` grid (the layout
+/// above), slices in parallel: how the 2013 paper stores its analytic operators (§6: 128³
+/// textures). \throw isokit::InputError on bad sizes or a non-finite sample.
+GridOperator sample_operator(const std::function<float(float f1, float f2, float d)>& g, int nf, int nd);
+
+/// The 2013 gradient-based blend (analytic.h, `gradient_blend_2013`) sampled by `sample_operator`.
+GridOperator sampled_gradient_blend_2013(int nf, int nd);
 
 }  // namespace isokit::operators
