@@ -12,7 +12,7 @@
 #include "isokit/implicit/fit.h"
 #include "isokit/implicit/program_field.h"
 #include "isokit/implicit/skeleton.h"
-#include "isokit/operators/analytic.h"
+#include "isokit/operators/grid_operator.h"
 
 namespace {
 
@@ -97,16 +97,9 @@ const Rig& rig() {
     }
     // A 128^2 x 16 grid operator sampled from the 2013 blend (the tree's cost does not depend
     // on the values, only on the grid sizes).
-    const int nd = 16, nf = 128;
-    std::vector<float> data(std::size_t(nd) * nf * nf);
-    for (int k = 0; k < nd; ++k)
-      for (int i = 0; i < nf; ++i)
-        for (int j = 0; j < nf; ++j)
-          data[std::size_t((k * nf + i) * nf + j)] =
-              operators::gradient_blend_2013(float(i) / (nf - 1), float(j) / (nf - 1), float(k) / (nd - 1)).g;
-    const NodeOperator contact =
-        NodeOperator::grid_operator(std::make_shared<const operators::GridOperator>(nd, nf, std::move(data)),
-                                    operators::Controller::preset("contact"), "contact");
+    const NodeOperator contact = NodeOperator::grid_operator(
+        std::make_shared<const operators::GridOperator>(operators::sampled_gradient_blend_2013(128, 16)),
+        operators::Controller::preset("contact"), "contact");
     std::vector<JointSetup> joints(s.parent.size(), JointSetup{contact, false});
     Rig out;
     out.field = std::make_shared<ProgramField>(build_tree_2014(s, joints));

@@ -148,6 +148,12 @@ void BM_GradientBlend2013(benchmark::State& state) {
   benchmark::DoNotOptimize(acc);
 }
 
+// The 2013 blend sampled into a grid operator (operators.blend_grid): once per 2013 field.
+void BM_SampleBlend2013(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  for (auto _ : state) benchmark::DoNotOptimize(sampled_gradient_blend_2013(n, n).data().data());
+}
+
 }  // namespace
 
 BENCHMARK(BM_Slice)
@@ -169,5 +175,6 @@ BENCHMARK(BM_CheckOperator)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_EditSlice)->Arg(0)->Arg(3)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_GridEval);
 BENCHMARK(BM_GradientBlend2013);
+BENCHMARK(BM_SampleBlend2013)->Arg(64)->Arg(128)->Unit(benchmark::kMillisecond);
 
 BENCHMARK_MAIN();

@@ -323,7 +323,7 @@ TEST_CASE("studio: save, open, export and recent files", "[studio]") {
   CHECK(!other.can_undo());
   CHECK_THROWS_AS(other.open((dir / "missing.json").string()), InputError);
   CHECK(other.spec() == model.spec());
-  // open_file: the same model as open() on a placeholder, without the placeholder.
+  // open_file: the same model as open() on another document, without that first document.
   const std::unique_ptr<StudioModel> opened = StudioModel::open_file(spec_path, o);
   CHECK(opened->spec() == model.spec());
   CHECK(opened->document_path() == spec_path);

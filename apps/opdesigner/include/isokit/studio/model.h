@@ -53,7 +53,7 @@ class StudioModel {
   /// in the background. \throw isokit::InputError for an invalid spec.
   explicit StudioModel(OperatorSpec spec, StudioOptions options = {});
   /// A model of the spec file at `path`, as `open(path)` leaves it (document path, recent file)
-  /// without building a placeholder document first. \throw isokit::InputError (load_spec's
+  /// without building a throwaway document first. \throw isokit::InputError (load_spec's
   /// message, or an invalid spec).
   static std::unique_ptr<StudioModel> open_file(const std::string& path, StudioOptions options = {});
   ~StudioModel();
