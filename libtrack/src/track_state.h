@@ -5,6 +5,7 @@
 
 #include <atomic>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "active_set.h"
@@ -26,6 +27,26 @@ constexpr float kChebyshevMaxTurnDeg = 10.f;
 // direction at one of its vertices by more than this (an inverted one deviates by more than 90°).
 constexpr float kFoldCandidateDeg = 45.f;
 
+class TangentSolver;  // global_solve.h
+
+/// The global solve's factorisation and tangent bases, kept between calls (TrackerOptions::
+/// relaxation = kGlobal): a cache, so a copy starts empty and `reset()` follows a change of the
+/// unknowns' layout (relaxation mask, free vertices).
+class TangentSolverCache {
+ public:
+  TangentSolverCache();
+  ~TangentSolverCache();
+  TangentSolverCache(const TangentSolverCache&);
+  TangentSolverCache& operator=(const TangentSolverCache&);
+  TangentSolverCache(TangentSolverCache&&) noexcept;
+  TangentSolverCache& operator=(TangentSolverCache&&) noexcept;
+  void reset();
+  TangentSolver& get();  ///< built on first use
+
+ private:
+  std::unique_ptr<TangentSolver> solver_;
+};
+
 /// What the tracker precomputes at construction (IsoSurfaceTracker's data). Per-vertex arrays are
 /// in the internal order: internal vertex k is the caller's vertex `order[k]` (empty: the same
 /// order), `rank` the inverse.
@@ -46,6 +67,7 @@ struct TrackerModel {
   float diagonal{0};                        // rest bounding-box diagonal
   std::vector<std::uint8_t> rest_inverted;  // per triangle (empty: none recorded)
   std::vector<std::uint8_t> free;           // per vertex: free vertex (set_rest_field; all 0 before)
+  TangentSolverCache global;                // kGlobal: factor and bases between calls
   // Outputs of the last call.
   VertexFlags flags;                        // caller's order
   std::vector<std::uint8_t> last_inverted;  // per triangle, at the end of the last call

@@ -8,6 +8,7 @@
 #include <utility>
 
 #include "field_eval.h"
+#include "global_solve.h"
 #include "isokit/core/error.h"
 #include "isokit/core/mesh_quality.h"
 #include "mesh_geometry.h"
@@ -83,6 +84,7 @@ void IsoSurfaceTracker::set_relaxation_mask(std::vector<float> mask) {
     require(mask[i] >= 0.f && mask[i] <= 1.f, "relaxation mask vertex " + std::to_string(i),
             "is outside [0, 1] (" + format_number(mask[i]) + ")", "use 0 (no tangential move) .. 1");
   m.mask = m.order.empty() ? std::move(mask) : detail::permuted(mask, m.order);
+  m.global.reset();  // the unknowns follow the mask
 }
 
 void IsoSurfaceTracker::set_fold_repair_mask(std::vector<std::uint8_t> mask) {
@@ -143,6 +145,7 @@ void IsoSurfaceTracker::set_rest_field(const FieldFunction& rest_field) {
   mark_rest_inversions(rest_field);
   detail::TrackerModel& m = *model_;
   m.free = detail::free_vertices(rest_field, m.rest, m.triangles, m.options);
+  m.global.reset();  // free vertices have three unknowns
 }
 
 namespace {
@@ -178,10 +181,14 @@ TrackStats IsoSurfaceTracker::track(const FieldFunction& field, const std::vecto
   if (!m.order.empty()) initial = detail::permuted(initial, m.order);
   detail::TrackState s(m, field, rotations, std::move(initial));
 
-  detail::project(s);  // 1. Newton projection (2014 §5 stage 2)
-  const std::unique_ptr<detail::RelaxationStrategy> strategy =
-      s.cg ? detail::cg_relaxation(s) : detail::jacobi_relaxation();
-  detail::relax(s, *strategy);  // 2. tangential ARAP relaxation + Newton (2014 §5 stage 3, §5.2)
+  if (m.options.relaxation == Relaxation::kGlobal) {
+    detail::solve_frame(s, m.global.get());  // 1 + 2. one convergent solve (not in the papers)
+  } else {
+    detail::project(s);  // 1. Newton projection (2014 §5 stage 2)
+    const std::unique_ptr<detail::RelaxationStrategy> strategy =
+        s.cg ? detail::cg_relaxation(s) : detail::jacobi_relaxation();
+    detail::relax(s, *strategy);  // 2. tangential ARAP relaxation + Newton (2014 §5 stage 3, §5.2)
+  }
   detail::mark_contacts(s);     // 3. contacts: field flags, angle rule (2013 §5), folds
   detail::smooth_contacts(s);   // 4. β-diffused Laplacian smoothing (2013 §5 eq. 7)
   detail::repair_folds(s);      // 5. fold repair (not in the papers)

@@ -96,6 +96,11 @@ void validate_options(const TrackerOptions& o) {
           "pass non-negative iteration counts");
   require(std::isfinite(o.tolerance) && o.tolerance >= 0.f, "TrackerOptions::tolerance",
           "must be finite and >= 0", "use e.g. 1e-5");
+  require(std::isfinite(o.iso_tolerance) && o.iso_tolerance > 0.f, "TrackerOptions::iso_tolerance",
+          "must be finite and > 0 (got " + format_number(o.iso_tolerance) + ")", "use e.g. 1e-3");
+  require(std::isfinite(o.global_regularization) && o.global_regularization > 0.f,
+          "TrackerOptions::global_regularization",
+          "must be finite and > 0 (got " + format_number(o.global_regularization) + ")", "use e.g. 1e-4");
   require(std::isfinite(o.max_step) && o.max_step > 0.f, "TrackerOptions::max_step", "must be > 0",
           "use e.g. 0.5");
   require(std::isfinite(o.max_cotangent) && o.max_cotangent > 0.f, "TrackerOptions::max_cotangent",

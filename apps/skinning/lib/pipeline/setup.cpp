@@ -322,15 +322,22 @@ void read_tracker(const json& t, const std::string& w, SkinSetup& s) {
               "min_contact_damping",
               "fold_contacts",
               "free_vertex_angle_deg",
-              "smoothing_keep_detail"},
+              "smoothing_keep_detail",
+              "iso_tolerance",
+              "global_regularization"},
              w);
-  std::string relaxation = "jacobi";
-  read(t, "relaxation", relaxation, w);
-  if (relaxation == "cg")
-    s.tracker.relaxation = track::Relaxation::kConjugateGradient;
-  else
-    require(relaxation == "jacobi", w + ".relaxation", "unknown solver '" + relaxation + "'",
-            "use jacobi (2014) or cg");
+  if (t.contains("relaxation")) {
+    std::string relaxation;
+    read(t, "relaxation", relaxation, w);
+    if (relaxation == "cg")
+      s.tracker.relaxation = track::Relaxation::kConjugateGradient;
+    else if (relaxation == "jacobi")
+      s.tracker.relaxation = track::Relaxation::kJacobi;
+    else
+      require(relaxation == "global", w + ".relaxation", "unknown solver '" + relaxation + "'",
+              "use jacobi (2014, the default), global or cg");
+    if (relaxation == "global") s.tracker.relaxation = track::Relaxation::kGlobal;
+  }
   read(t, "max_iterations", s.tracker.max_iterations, w);
   read(t, "tolerance", s.tracker.tolerance, w);
   read(t, "sigma", s.tracker.sigma, w);
@@ -357,6 +364,12 @@ void read_tracker(const json& t, const std::string& w, SkinSetup& s) {
           w + ".free_vertex_angle_deg", "must be in (0, 180]",
           "use 60 (the default) or 180 (every vertex held to its iso-value, 2014)");
   read(t, "smoothing_keep_detail", s.tracker.smoothing.keep_detail, w);
+  read(t, "iso_tolerance", s.tracker.iso_tolerance, w);
+  require(std::isfinite(s.tracker.iso_tolerance) && s.tracker.iso_tolerance > 0.f, w + ".iso_tolerance",
+          "must be > 0 (field units)", "use 1e-3 (the default)");
+  read(t, "global_regularization", s.tracker.global_regularization, w);
+  require(std::isfinite(s.tracker.global_regularization) && s.tracker.global_regularization > 0.f,
+          w + ".global_regularization", "must be > 0", "use 1e-4 (the default)");
   read_tracker_repairs(t, w, s);
 }
 
@@ -396,6 +409,7 @@ void apply_paper_preset(SkinSetup& s) {
   s.max_fit_error = 0;
   s.capsule_match = 0;
   track::TrackerOptions& t = s.tracker;
+  t.relaxation = track::Relaxation::kJacobi;
   t.chebyshev_rho = 0.f;
   t.active_set = false;
   t.lazy_evaluation = false;

@@ -39,8 +39,15 @@ struct TrackStats {
   /// Field evaluations of the Newton and relaxation iterations (2014 tracker; fewer than the
   /// vertex updates with lazy evaluation; the final statistics' evaluations are not counted).
   long field_evaluations{0};
-  long solver_iterations{0};  ///< CG iterations summed over the relaxation (Relaxation::kConjugateGradient)
-  bool converged{false};      ///< largest move fell under the tolerance before the iteration cap
+  /// CG iterations summed over the relaxation (kConjugateGradient; kGlobal: the preconditioned CG
+  /// iterations of its tangential solves, 0 for a solve by a fresh factorisation)
+  long solver_iterations{0};
+  int factorizations{0};  ///< kGlobal: numeric factorisations of the tangential system in the call
+  int backtracks{0};      ///< kGlobal: line-search step halvings in the call
+  /// kGlobal: the largest move the last tangential solve asked for (the tangential residual of
+  /// TrackerOptions::tolerance; 0 for the other solvers)
+  float tangential_residual{0};
+  bool converged{false};      ///< the convergence test of TrackerOptions::tolerance held before the cap
   float max_move{0};          ///< largest vertex move in the last iteration
   float max_residual{0};   ///< max |f(v) - iso_v| over vertices outside the smoothed contact region, not free
   float mean_residual{0};  ///< mean of the same

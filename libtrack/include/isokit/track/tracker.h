@@ -26,6 +26,10 @@
 ///    triangles), which step 6 updates for the vertices it moves.
 /// 6. **Orientation repair** (`orientation_repair`, not in the papers): single-vertex moves that
 ///    turn the last inverted triangles the right way, never through another triangle.
+/// With `relaxation = Relaxation::kGlobal`, steps 1 and 2 are one solve instead: the exact
+/// tangent-plane problem per iteration (factorised once per tracker, the factor kept between
+/// calls), a line search on the ARAP energy, bracketed projections, until the convergence test of
+/// TrackerOptions::tolerance (docs/tracking.md, "The global solve (option)").
 /// All updates are double-buffered (Jacobi); results do not depend on `grain`.
 #pragma once
 

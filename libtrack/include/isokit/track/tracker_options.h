@@ -65,7 +65,13 @@ struct OrientationRepairOptions {
 /// How the tangential ARAP energy is minimised between Newton projections (2014 §5.2).
 enum class Relaxation {
   kJacobi,            ///< One Jacobi sweep per iteration (2014), Chebyshev-accelerated.
-  kConjugateGradient  ///< The active vertices' tangent-plane system solved by CG per iteration.
+  kConjugateGradient, ///< The active vertices' tangent-plane system solved by CG per iteration.
+  /// The whole tangent-plane problem of 2014 eq. 3 – 4 (`Tᵀ L T u = Tᵀ g` over every vertex, L
+  /// the rest cotangent Laplacian, T the tangent bases) solved exactly at each iteration — its
+  /// factorisation, analysed once per tracker, serves as the preconditioner of the next solves —
+  /// alternated with safeguarded Newton projections. Not in the papers (they solve by Jacobi
+  /// sweeps); docs/tracking.md, "The global solve"; docs/decisions/global-tangent-solve.md.
+  kGlobal
 };
 
 struct TrackerOptions {
@@ -76,11 +82,26 @@ struct TrackerOptions {
   /// stage 2 gives no count).
   int initial_newton_steps{10};
   /// Cap on the relaxation iterations, each one tangential step + one Newton step (count;
-  /// default 100; 2014 Table 1 reports 10 – 600).
+  /// default 100; 2014 Table 1 reports 10 – 600). With kGlobal an iteration is one exact
+  /// tangential solve followed by up to 4 Newton steps, and a call also stops (capped) when its
+  /// tangential residual has not halved for 8 iterations.
   int max_iterations{100};
-  /// The relaxation stops when the largest move of an iteration is below `tolerance` × the rest
-  /// bounding-box diagonal (dimensionless; default 1e-5; the papers give none).
+  /// Tangential tolerance: × the rest bounding-box diagonal (dimensionless; default 1e-5; the
+  /// papers give none). **Converged** (TrackStats::converged) means, with kGlobal: the largest iso
+  /// residual `|f(v) - iso_v|` of the vertices held to their iso-value and not in contact is ≤
+  /// `iso_tolerance` and the largest tangential residual — the move the next iteration's solve
+  /// would make — is ≤ `tolerance` × diagonal; a call stopped by stagnation or the cap is capped.
+  /// With kJacobi / kConjugateGradient (2014's test): the largest move of an iteration fell below
+  /// `tolerance` × diagonal.
   float tolerance{1e-5f};
+  /// Iso tolerance of the convergence test (field units; default 1e-3, QUALITY.md's iso residual).
+  float iso_tolerance{1e-3f};
+  /// kGlobal: Levenberg–Marquardt regularisation of the tangential solve, `eps Σj wij |d_i|²` per
+  /// vertex: keeps the system positive definite where sliding costs no energy (a translation along
+  /// a cylinder's axis) and anchors every connected component; it leaves the solution of a
+  /// converged call unchanged, since d = 0 there (dimensionless, > 0; default 1e-4; not in the
+  /// papers).
+  float global_regularization{1e-4f};
   /// Longest Newton step (edges: the vertex's mean rest edge length; default 0.5; not in the
   /// papers; docs/tracking.md, "Deviations", Newton step length).
   float max_step{0.5f};
@@ -132,8 +153,9 @@ struct TrackerOptions {
   /// or in the last call (false; may miss a triangle inverted only at its centroid). Default
   /// false; not in the papers; docs/tracking.md, step 3 "Which triangles are tested".
   bool test_all_triangles{false};
-  /// Relaxation solver (default Jacobi, 2014 §5.2, which names CG as the faster alternative;
-  /// docs/tracking.md, step 2 "Conjugate-gradient relaxation").
+  /// Relaxation solver (default kJacobi, 2014 §5.2; kGlobal converges on analytic fields in a
+  /// number of iterations that does not grow with the mesh but loses to Jacobi on the real rigs'
+  /// evaluation score, so it is not the default: docs/decisions/global-tangent-solve.md).
   Relaxation relaxation{Relaxation::kJacobi};
   /// CG iterations per relaxation iteration, with kConjugateGradient (count, ≥ 1; default 200).
   int cg_max_iterations{200};

@@ -21,7 +21,7 @@
 /// ```
 /// `tree`: "auto" (the method's paper), "2013" or "2014". `default_operator`: "auto" (2014:
 /// contact, 2013: blend), "union", "blend", "bulge" or "contact". `tracker.relaxation`: "jacobi"
-/// or "cg" (track::Relaxation).
+/// (2014, the default), "global" (docs/decisions/global-tangent-solve.md) or "cg" (track::Relaxation).
 ///
 /// Designed operators (docs/operators.md, "Using a designed operator in skinning"):
 /// `operators.contact_spec` / `operators.bulge_spec` name an operator spec file
