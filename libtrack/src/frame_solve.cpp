@@ -36,15 +36,27 @@ constexpr double kEnergySlack = 1e-7;
 // Per-call scratch of the solve.
 struct FrameScratch {
   explicit FrameScratch(std::size_t n)
-      : grad(n), stale(n, 0), held(n, 0), stopped(n, 0), zero(n, 0.f), curvature(n, Sym3{}), d(n), normals(n),
-        a(n), b(n), ra(n), rb(n), bracketed(n, 0), side(n, 0) {}
-  std::vector<Vec3f> grad;           // ∇f at the last evaluation
-  std::vector<std::uint8_t> stale;   // moved since its last evaluation
-  std::vector<std::uint8_t> held;    // no tangential move for the rest of the call
-  std::vector<std::uint8_t> stopped; // no move at all for the rest of the call (unsettled projection)
-  std::vector<float> zero;           // no per-vertex damping of the tangential solve
-  std::vector<Sym3> curvature;       // μi ∇²f at each vertex (the Lagrangian's curvature term)
-  std::vector<Vec3f> d, normals;     // the tangential solve's moves and plane normals
+      : grad(n),
+        stale(n, 0),
+        held(n, 0),
+        stopped(n, 0),
+        zero(n, 0.f),
+        curvature(n, Sym3{}),
+        d(n),
+        normals(n),
+        a(n),
+        b(n),
+        ra(n),
+        rb(n),
+        bracketed(n, 0),
+        side(n, 0) {}
+  std::vector<Vec3f> grad;            // ∇f at the last evaluation
+  std::vector<std::uint8_t> stale;    // moved since its last evaluation
+  std::vector<std::uint8_t> held;     // no tangential move for the rest of the call
+  std::vector<std::uint8_t> stopped;  // no move at all for the rest of the call (unsettled projection)
+  std::vector<float> zero;            // no per-vertex damping of the tangential solve
+  std::vector<Sym3> curvature;        // μi ∇²f at each vertex (the Lagrangian's curvature term)
+  std::vector<Vec3f> d, normals;      // the tangential solve's moves and plane normals
   std::vector<int> list;
   // Projection: the bracket [a, b] of a vertex whose residual changed sign (residuals ra, rb),
   // and which endpoint the last regula falsi step replaced (1: a, 2: b).
@@ -56,8 +68,8 @@ struct FrameScratch {
 // Vertex i was evaluated at s.cur[i]: value f, gradient g, the field's contact flag fc. A vertex
 // without a usable gradient is lost for the rest of the call; a gradient turned by more than the
 // contact angle flags a contact (2013 §5).
-void take_evaluation(TrackState& s, FrameScratch& f, std::size_t i, float val, const Vec3f& g, std::uint8_t fc,
-                     bool newton) {
+void take_evaluation(TrackState& s, FrameScratch& f, std::size_t i, float val, const Vec3f& g,
+                     std::uint8_t fc, bool newton) {
   const TrackerOptions& o = s.m.options;
   s.values[i] = val;
   s.field_contact[i] = fc;
@@ -226,7 +238,8 @@ void curvature_terms(TrackState& s, FrameScratch& f) {
     f.curvature[i] = Sym3{};
     if (f.held[i] || !held_to_iso(s, i) || s.normal[i] == Vec3f{} || s.m.adj.degree(int(i)) == 0) continue;
     const Vec3f nrm = s.normal[i];
-    const Vec3f axis = std::abs(nrm.x) < 0.6f ? Vec3f{1, 0, 0} : (std::abs(nrm.y) < 0.6f ? Vec3f{0, 1, 0} : Vec3f{0, 0, 1});
+    const Vec3f axis =
+        std::abs(nrm.x) < 0.6f ? Vec3f{1, 0, 0} : (std::abs(nrm.y) < 0.6f ? Vec3f{0, 1, 0} : Vec3f{0, 0, 1});
     Vec3f a = cross(nrm, axis);
     a = a / std::sqrt(squared_norm(a));
     u[i] = a;
@@ -263,8 +276,9 @@ void curvature_terms(TrackState& s, FrameScratch& f) {
     auto entry = [&](float x0, float y0, float x1, float y1) {
       return mu * (huu * x0 * x1 + hvv * y0 * y1 + huv * (x0 * y1 + y0 * x1));
     };
-    f.curvature[i] = {entry(a0.x, b0.x, a0.x, b0.x), entry(a0.y, b0.y, a0.y, b0.y), entry(a0.z, b0.z, a0.z, b0.z),
-                      entry(a0.x, b0.x, a0.y, b0.y), entry(a0.x, b0.x, a0.z, b0.z), entry(a0.y, b0.y, a0.z, b0.z)};
+    f.curvature[i] = {entry(a0.x, b0.x, a0.x, b0.x), entry(a0.y, b0.y, a0.y, b0.y),
+                      entry(a0.z, b0.z, a0.z, b0.z), entry(a0.x, b0.x, a0.y, b0.y),
+                      entry(a0.x, b0.x, a0.z, b0.z), entry(a0.y, b0.y, a0.z, b0.z)};
   }
 }
 

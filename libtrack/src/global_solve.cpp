@@ -10,6 +10,9 @@
 
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
+#ifdef ISOKIT_HAVE_CHOLMOD
+#include <Eigen/CholmodSupport>
+#endif
 
 #include "field_eval.h"
 #include "mesh_geometry.h"
@@ -21,7 +24,16 @@ namespace isokit::track::detail {
 namespace {
 
 using SpMat = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
+#ifdef ISOKIT_HAVE_CHOLMOD
+// CHOLMOD's simplicial LLᵀ: measured faster than its supernodal mode (Debian's reference BLAS)
+// and than Eigen's SimplicialLLT on these systems (docs/performance.md, "The global solve").
+class Factor : public Eigen::CholmodDecomposition<SpMat, Eigen::Lower> {
+ public:
+  Factor() { setMode(Eigen::CholmodSimplicialLLt); }
+};
+#else
 using Factor = Eigen::SimplicialLLT<SpMat, Eigen::Lower, Eigen::AMDOrdering<int>>;
+#endif
 
 // Preconditioned CG on the current matrix with the last numeric factor: stop when the
 // preconditioned residual norm fell by this factor (relative; the tangential tolerance is then
@@ -39,7 +51,8 @@ constexpr float kMinCurvature = 0.f;
 
 // Any unit vector perpendicular to the unit vector n.
 Vec3f perpendicular(const Vec3f& n) {
-  const Vec3f axis = std::abs(n.x) < 0.6f ? Vec3f{1, 0, 0} : (std::abs(n.y) < 0.6f ? Vec3f{0, 1, 0} : Vec3f{0, 0, 1});
+  const Vec3f axis =
+      std::abs(n.x) < 0.6f ? Vec3f{1, 0, 0} : (std::abs(n.y) < 0.6f ? Vec3f{0, 1, 0} : Vec3f{0, 0, 1});
   const Vec3f t = cross(n, axis);
   return t / std::sqrt(squared_norm(t));
 }
@@ -50,9 +63,9 @@ struct TangentSolver::Impl {
   bool ready{false};
   std::vector<int> offset, ndof;  // per vertex: first unknown, unknown count (0, 2 or 3)
   int dofs{0};
-  std::vector<Vec3f> t1;       // per vertex: first tangent vector, carried from call to call
-  std::vector<Vec3f> t2;       // second tangent vector (n × t1) of the current iteration
-  SpMat a;                     // full symmetric storage, pattern fixed
+  std::vector<Vec3f> t1;  // per vertex: first tangent vector, carried from call to call
+  std::vector<Vec3f> t2;  // second tangent vector (n × t1) of the current iteration
+  SpMat a;                // full symmetric storage, pattern fixed
   // Value indices into `a`: per directed edge, the start of its ndof_i × ndof_j block's indices
   // in `block_index`; per vertex, the start of its ndof_i² diagonal block's in `diag_index`.
   std::vector<int> block_at, block_index, diag_block, diag_index;
@@ -145,12 +158,14 @@ void TangentSolver::Impl::build(const TrackState& s) {
     if (ndof[i] == 0) continue;
     diag_block[i] = static_cast<int>(diag_index.size());
     for (int a0 = 0; a0 < ndof[i]; ++a0)
-      for (int b0 = 0; b0 < ndof[i]; ++b0) diag_index.push_back(value_index(a, offset[i] + a0, offset[i] + b0));
+      for (int b0 = 0; b0 < ndof[i]; ++b0)
+        diag_index.push_back(value_index(a, offset[i] + a0, offset[i] + b0));
     for (int k = m.adj.offsets[i]; k < m.adj.offsets[i + 1]; ++k) {
       const std::size_t j = std::size_t(m.adj.neighbors[std::size_t(k)]);
       block_at[std::size_t(k)] = static_cast<int>(block_index.size());
       for (int a0 = 0; a0 < ndof[i]; ++a0)
-        for (int b0 = 0; b0 < ndof[j]; ++b0) block_index.push_back(value_index(a, offset[i] + a0, offset[j] + b0));
+        for (int b0 = 0; b0 < ndof[j]; ++b0)
+          block_index.push_back(value_index(a, offset[i] + a0, offset[j] + b0));
     }
   }
   t1.assign(n, Vec3f{});
@@ -200,7 +215,8 @@ void TangentSolver::Impl::assemble(const TrackState& s, const std::vector<Vec3f>
       const int nj = ndof[j];
       const int* bi = block_index.data() + block_at[std::size_t(k)];
       for (int a0 = 0; a0 < nd; ++a0)
-        for (int b0 = 0; b0 < nj; ++b0) val[bi[a0 * nj + b0]] = -double(w) * double(dot(basis(i, a0), basis(j, b0)));
+        for (int b0 = 0; b0 < nj; ++b0)
+          val[bi[a0 * nj + b0]] = -double(w) * double(dot(basis(i, a0), basis(j, b0)));
     }
     for (int a0 = 0; a0 < nd; ++a0) b[offset[i] + a0] = double(dot(basis(i, a0), g));
   }

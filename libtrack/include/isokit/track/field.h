@@ -44,8 +44,9 @@ struct TrackStats {
   long solver_iterations{0};
   int factorizations{0};  ///< kGlobal: numeric factorisations of the tangential system in the call
   int backtracks{0};      ///< kGlobal: line-search step halvings in the call
-  /// kGlobal: the largest move the last tangential solve asked for (the tangential residual of
-  /// TrackerOptions::tolerance; 0 for the other solvers)
+  /// kGlobal: the tangential residual of TrackerOptions::tolerance at the end of the call (the
+  /// smaller of the largest move the last solve asked for and the last iteration's largest move;
+  /// 0 for the other solvers)
   float tangential_residual{0};
   bool converged{false};      ///< the convergence test of TrackerOptions::tolerance held before the cap
   float max_move{0};          ///< largest vertex move in the last iteration

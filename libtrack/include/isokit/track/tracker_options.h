@@ -83,14 +83,15 @@ struct TrackerOptions {
   int initial_newton_steps{10};
   /// Cap on the relaxation iterations, each one tangential step + one Newton step (count;
   /// default 100; 2014 Table 1 reports 10 – 600). With kGlobal an iteration is one exact
-  /// tangential solve followed by up to 4 Newton steps, and a call also stops (capped) when its
-  /// tangential residual has not halved for 8 iterations.
+  /// tangential solve, a line search and up to 4 projection steps, and a call also stops (capped)
+  /// when its tangential residual has not fallen by 10 % in 8 iterations.
   int max_iterations{100};
   /// Tangential tolerance: × the rest bounding-box diagonal (dimensionless; default 1e-5; the
   /// papers give none). **Converged** (TrackStats::converged) means, with kGlobal: the largest iso
   /// residual `|f(v) - iso_v|` of the vertices held to their iso-value and not in contact is ≤
-  /// `iso_tolerance` and the largest tangential residual — the move the next iteration's solve
-  /// would make — is ≤ `tolerance` × diagonal; a call stopped by stagnation or the cap is capped.
+  /// `iso_tolerance` and the tangential residual — the smaller of the largest move the next
+  /// solve asks for and the largest move of the last iteration — is ≤ `tolerance` × diagonal; a
+  /// call stopped by stagnation or the cap is capped.
   /// With kJacobi / kConjugateGradient (2014's test): the largest move of an iteration fell below
   /// `tolerance` × diagonal.
   float tolerance{1e-5f};
