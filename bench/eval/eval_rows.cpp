@@ -5,6 +5,8 @@
 #include <cmath>
 #include <cstdio>
 #include <sstream>
+#include <utility>
+#include <vector>
 
 namespace isokit::eval {
 
@@ -57,6 +59,22 @@ bool closed_of(const json& metrics, bool fallback) {
   });
 }
 
+// The median and the 95th percentile (nearest rank) of the iterations per tracker call over every
+// frame's `call_iterations`; null when no frame has them.
+std::pair<json, json> call_iteration_quantiles(const json& frames) {
+  std::vector<double> it;
+  for (const json& f : frames)
+    if (f.contains("call_iterations") && f["call_iterations"].is_array())
+      for (const json& v : f["call_iterations"])
+        if (v.is_number()) it.push_back(v.get<double>());
+  if (it.empty()) return {json(nullptr), json(nullptr)};
+  std::sort(it.begin(), it.end());
+  const std::size_t n = it.size();
+  const double median = n % 2 ? it[n / 2] : 0.5 * (it[n / 2 - 1] + it[n / 2]);
+  const std::size_t rank = static_cast<std::size_t>(std::ceil(0.95 * double(n)));
+  return {json(median), json(it[std::max<std::size_t>(rank, 1) - 1])};
+}
+
 Row method_row(const json& m, bool closed) {
   const json& frames = m["frames"];
   const json& worst = m["worst"];
@@ -80,6 +98,9 @@ Row method_row(const json& m, bool closed) {
       r["tracker_calls"].is_number() && r["capped_calls"].is_number() && r["tracker_calls"].get<double>() > 0;
   r["capped_share"] =
       calls ? json(r["capped_calls"].get<double>() / r["tracker_calls"].get<double>()) : json(nullptr);
+  const auto [median, p95] = call_iteration_quantiles(frames);
+  r["iterations_median"] = median;
+  r["iterations_p95"] = p95;
   return r;
 }
 
@@ -124,13 +145,14 @@ Row error_row(const std::string& rig, const std::string& animation, const std::s
 std::string markdown_table(const std::vector<Row>& rows) {
   std::ostringstream o;
   o << "| rig | animation | method | frames | self-int. new (all) | new inverted | edge dist. max / mean "
-       "| volume min / max | iso residual | rest recovery | ms mean / worst | calls at cap |\n"
-       "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+       "| volume min / max | iso residual | rest recovery | ms mean / worst | calls at cap "
+       "| iterations per call median / p95 |\n"
+       "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
   for (const Row& r : rows) {
     o << "| " << r.value("rig", "") << " | " << r.value("animation", "") << " | " << r.value("method", "")
       << " | ";
     if (r.contains("error") && r["error"].is_string()) {
-      o << "**failed:** " << r["error"].get<std::string>() << " | | | | | | | | |\n";
+      o << "**failed:** " << r["error"].get<std::string>() << " | | | | | | | | | |\n";
       continue;
     }
     o << r["frames"].get<int>() << " | " << count_cell(r["self_intersections_new"]) << " ("
@@ -143,7 +165,7 @@ std::string markdown_table(const std::vector<Row>& rows) {
       << cell(r["mean_ms"], "%.1f") << " / " << cell(r["worst_ms"], "%.1f") << " | "
       << cell(r["capped_share"].is_number() ? json(100 * r["capped_share"].get<double>()) : json(nullptr),
               "%.0f %%")
-      << " |\n";
+      << " | " << cell(r["iterations_median"], "%.0f") << " / " << cell(r["iterations_p95"], "%.0f") << " |\n";
   }
   return o.str();
 }

@@ -68,17 +68,24 @@ TEST_CASE("eval: rows use the optional metrics when present and show — when ab
   REQUIRE(rows.size() == 1);
   CHECK(rows[0]["self_intersections_new"].is_null());
   CHECK(rows[0]["capped_share"].is_null());
+  CHECK(rows[0]["iterations_median"].is_null());
   CHECK(rows[0]["worst_ms"] == 3);
   CHECK(rows[0]["volume_ratio_min"] == 0.9);
   CHECK(markdown_table(rows).find("— (7)") != std::string::npos);
 
   m["closed"] = false;
   m["methods"]["tracking2014"]["frames"] = nlohmann::json::parse(R"([
-    {"ms": 2, "volume_ratio": 0.9, "self_intersections_new": 1, "tracker_calls": 10, "capped_calls": 1},
-    {"ms": 3, "volume_ratio": 1.1, "self_intersections_new": 4, "tracker_calls": 30, "capped_calls": 1}])");
+    {"ms": 2, "volume_ratio": 0.9, "self_intersections_new": 1, "tracker_calls": 10, "capped_calls": 1,
+     "call_iterations": [5, 1, 9]},
+    {"ms": 3, "volume_ratio": 1.1, "self_intersections_new": 4, "tracker_calls": 30, "capped_calls": 1,
+     "call_iterations": [2, 7, 3, 100]}])");
   rows = rows_from_metrics(m, "r", "a", true);
   CHECK(rows[0]["self_intersections_new"] == 4);
   CHECK(rows[0]["capped_share"] == 0.05);
+  // Iterations per call over both frames (1 2 3 5 7 9 100): median 5, nearest-rank p95 100.
+  CHECK(rows[0]["iterations_median"] == 5);
+  CHECK(rows[0]["iterations_p95"] == 100);
+  CHECK(markdown_table(rows).find("| 5 / 100 |") != std::string::npos);
   CHECK(rows[0]["volume_ratio_min"].is_null());
   CHECK(markdown_table(rows).find("(open)") != std::string::npos);
 }

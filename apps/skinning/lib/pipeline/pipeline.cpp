@@ -241,6 +241,7 @@ void track_frame(const Skinner& sk, BakeState& s, const Pose& pose, std::size_t 
     const track::TrackStats ts = s.tracker->track(s.field->function(), rotations, s.current);
     ++st.tracker_calls;
     st.capped_calls += ts.converged ? 0 : 1;
+    st.call_iterations.push_back(ts.iterations);
     st.iterations += ts.iterations;
     st.vertex_updates += double(ts.vertex_updates);
     st.field_evaluations += double(ts.field_evaluations);
@@ -270,6 +271,7 @@ const std::vector<std::uint8_t>* deform(const Skinner& sk, Method method, BakeSt
       const track::TrackStats ts = s.projector->project(s.field->function(), pos);
       st.tracker_calls = 1;
       st.capped_calls = ts.converged ? 0 : 1;
+      st.call_iterations = {ts.iterations};
       st.iterations = ts.iterations;
       st.vertex_updates = double(rig.rest.rows()) * ts.iterations;
       st.field_evaluations = st.vertex_updates;

@@ -134,6 +134,7 @@ std::string metrics_json(const Rig& rig, const std::vector<BakeResult>& results,
       fr["lost_vertices"] = s.lost_vertices;
       fr["tracker_calls"] = has_tracker(r.method) ? json(s.tracker_calls) : json(nullptr);
       fr["capped_calls"] = has_tracker(r.method) ? json(s.capped_calls) : json(nullptr);
+      fr["call_iterations"] = has_tracker(r.method) ? json(s.call_iterations) : json(nullptr);
       frames.push_back(fr);
     }
     m["frames"] = frames;

@@ -60,6 +60,8 @@ struct FrameStats {
   /// (`TrackStats::converged` false: `TrackerOptions::max_iterations`,
   /// `ProjectorOptions::max_iterations`).
   int capped_calls{0};
+  /// The iterations of each of those calls (TrackStats::iterations), in call order.
+  std::vector<int> call_iterations;
   FrameMetrics metrics;  ///< all quality metrics (field ones with the 2014 tree)
 };
 
