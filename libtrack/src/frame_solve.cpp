@@ -40,7 +40,6 @@ struct FrameScratch {
         stale(n, 0),
         held(n, 0),
         stopped(n, 0),
-        zero(n, 0.f),
         curvature(n, Sym3{}),
         d(n),
         normals(n),
@@ -54,7 +53,6 @@ struct FrameScratch {
   std::vector<std::uint8_t> stale;    // moved since its last evaluation
   std::vector<std::uint8_t> held;     // no tangential move for the rest of the call
   std::vector<std::uint8_t> stopped;  // no move at all for the rest of the call (unsettled projection)
-  std::vector<float> zero;            // no per-vertex damping of the tangential solve
   std::vector<Sym3> curvature;        // μi ∇²f at each vertex (the Lagrangian's curvature term)
   std::vector<Vec3f> d, normals;      // the tangential solve's moves and plane normals
   std::vector<int> list;
@@ -69,7 +67,7 @@ struct FrameScratch {
 // without a usable gradient is lost for the rest of the call; a gradient turned by more than the
 // contact angle flags a contact (2013 §5).
 void take_evaluation(TrackState& s, FrameScratch& f, std::size_t i, float val, const Vec3f& g,
-                     std::uint8_t fc, bool newton) {
+                     std::uint8_t fc) {
   const TrackerOptions& o = s.m.options;
   s.values[i] = val;
   s.field_contact[i] = fc;
@@ -87,20 +85,18 @@ void take_evaluation(TrackState& s, FrameScratch& f, std::size_t i, float val, c
   // kink instead (newton_phase), and damped steps left vertices off their iso-value.
   if (seen && dot(nrm, s.normal[i]) < s.cos_contact && !s.flags.free[i] && o.angle_contacts)
     s.flags.contact[i] = 1;
-  (void)newton;
   s.normal[i] = nrm;
   f.grad[i] = g;
 }
 
 // Evaluates the field at the listed vertices (one batched, parallel call).
-void evaluate(TrackState& s, FrameScratch& f, const std::vector<int>& list, bool newton) {
+void evaluate(TrackState& s, FrameScratch& f, const std::vector<int>& list) {
   const std::size_t m = list.size();
   for (std::size_t a = 0; a < m; ++a) s.batch_points[a] = s.cur[std::size_t(list[a])];
   eval_field(s.field, s.batch_points.data(), m, s.batch_values.data(), s.batch_gradients.data(),
              s.batch_contact.data(), s.m.options.grain);
   for (std::size_t a = 0; a < m; ++a)
-    take_evaluation(s, f, std::size_t(list[a]), s.batch_values[a], s.batch_gradients[a], s.batch_contact[a],
-                    newton);
+    take_evaluation(s, f, std::size_t(list[a]), s.batch_values[a], s.batch_gradients[a], s.batch_contact[a]);
   s.evaluations += static_cast<long>(m);
 }
 
@@ -123,7 +119,7 @@ bool off_iso(const TrackState& s, const FrameScratch& f, std::size_t i) {
 
 // Up to `steps` projection steps of the vertices off their iso-value, each followed by an
 // evaluation of the vertices it moved. A step is the Newton step `p <- p + σ (iso - f) ∇f / |∇f|²`
-// (scaled by the contact damping, at most max_step long) until the residual changes sign; from
+// (at most max_step long; no contact damping) until the residual changes sign; from
 // then on the root is bracketed on the segment between the last two points and the steps are
 // regula falsi (Illinois variant) on it, which converges on a kink of the field where Newton
 // steps would 2-cycle (docs/tracking.md, "Known limits").
@@ -155,7 +151,7 @@ void newton_phase(TrackState& s, FrameScratch& f, int steps, bool stop_unsettled
         s.cur[i] += newton_step(s, i, f.grad[i], squared_norm(f.grad[i]), r);
       }
     }
-    evaluate(s, f, f.list, true);
+    evaluate(s, f, f.list);
     for (int v : f.list) {
       const std::size_t i = std::size_t(v);
       if (s.flags.lost[i]) continue;
@@ -219,7 +215,7 @@ float apply_moves(TrackState& s, FrameScratch& f, float step) {
     f.bracketed[i] = 0;  // a bracket holds on the segment it was found on
     f.list.push_back(static_cast<int>(i));
   }
-  evaluate(s, f, f.list, false);
+  evaluate(s, f, f.list);
   return std::sqrt(mx2);
 }
 
@@ -352,7 +348,7 @@ void solve_frame(TrackState& s, TangentSolver& solver) {
   FrameScratch f(s.n);
   std::vector<int> all(s.n);
   for (std::size_t i = 0; i < s.n; ++i) all[i] = static_cast<int>(i);
-  evaluate(s, f, all, false);
+  evaluate(s, f, all);
   newton_phase(s, f, o.initial_newton_steps, false);
   float best = std::numeric_limits<float>::infinity();
   float net = std::numeric_limits<float>::infinity();  // the last iteration's largest move
@@ -362,7 +358,7 @@ void solve_frame(TrackState& s, TangentSolver& solver) {
   for (int k = 0; k < o.max_iterations; ++k) {
     plane_normals(s, f);
     curvature_terms(s, f);
-    solver.solve(s, f.normals, f.zero, f.curvature, f.d);
+    solver.solve(s, f.normals, f.curvature, f.d);
     const float dmax = largest_move(f);
     const float rmax = iso_residual(s, f);
     s.stats.iterations = k + 1;

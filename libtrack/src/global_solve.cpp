@@ -75,8 +75,8 @@ struct TangentSolver::Impl {
   Eigen::VectorXd b, x, r, z, p, q;
 
   void build(const TrackState& s);
-  void assemble(const TrackState& s, const std::vector<Vec3f>& normals, const std::vector<float>& damping,
-                const std::vector<Sym3>& curvature, float min_eigen);
+  void assemble(const TrackState& s, const std::vector<Vec3f>& normals, const std::vector<Sym3>& curvature,
+                float min_eigen);
   int solve_pcg();
   // The 2 × 2 tangent-plane block `Tiᵀ K Ti` of the curvature tensor K, its eigenvalues clamped
   // to ≥ `floor`.
@@ -179,8 +179,7 @@ void TangentSolver::Impl::build(const TrackState& s) {
 // Tangent bases from the plane normals (the first vector carried over by the least rotation, so
 // that the stale factor stays a good preconditioner), then the matrix values and right-hand side.
 void TangentSolver::Impl::assemble(const TrackState& s, const std::vector<Vec3f>& normals,
-                                   const std::vector<float>& damping, const std::vector<Sym3>& curvature,
-                                   float min_eigen) {
+                                   const std::vector<Sym3>& curvature, float min_eigen) {
   const TrackerModel& m = s.m;
   const float eps = m.options.global_regularization;
   for (std::size_t i = 0; i < s.n; ++i) {
@@ -198,7 +197,7 @@ void TangentSolver::Impl::assemble(const TrackState& s, const std::vector<Vec3f>
     const int nd = ndof[i];
     if (nd == 0) continue;
     const double wsum = m.weight_sum[i];
-    double alpha = (double(eps) + double(damping[i])) * wsum + wsum * (1.0 / double(m.mask[i]) - 1.0);
+    double alpha = double(eps) * wsum + wsum * (1.0 / double(m.mask[i]) - 1.0);
     if (nd == 2 && (normals[i] == Vec3f{} || t2[i] == Vec3f{})) alpha = kHoldStiffness * wsum;
     const int* di = diag_index.data() + diag_block[i];
     double k2[4] = {0, 0, 0, 0};
@@ -287,7 +286,7 @@ TangentSolver& TangentSolverCache::get() {
   return *solver_;
 }
 
-void TangentSolver::solve(TrackState& s, const std::vector<Vec3f>& normals, const std::vector<float>& damping,
+void TangentSolver::solve(TrackState& s, const std::vector<Vec3f>& normals,
                           const std::vector<Sym3>& curvature, std::vector<Vec3f>& d) {
   Impl& im = *impl_;
   if (!im.ready || im.ndof.size() != s.n) im.build(s);
@@ -296,7 +295,7 @@ void TangentSolver::solve(TrackState& s, const std::vector<Vec3f>& normals, cons
   const int before = im.factorizations;
   // Negative curvature terms first (clamped); if the matrix is then not positive definite, none.
   for (float floor : {kMinCurvature, 0.f}) {
-    im.assemble(s, normals, damping, curvature, floor);
+    im.assemble(s, normals, curvature, floor);
     s.stats.solver_iterations += im.solve_pcg();
     if (im.factored) break;
     im.refactor = true;

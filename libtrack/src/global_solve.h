@@ -32,13 +32,12 @@ class TangentSolver {
 
   /// Solves for the tangential displacements `d` (one per vertex, 0 for fixed ones) at the
   /// call's positions `s.cur`; `normals[i]` is the plane normal of vertex i (unit; 0 = hold the
-  /// vertex in place this iteration); `damping[i]` ≥ 0 adds `damping[i] Σj wij |d_i|²` to the
-  /// energy (a per-vertex trust region); `curvature[i]` is the constraint's curvature term of the
+  /// vertex in place this iteration); `curvature[i]` is the constraint's curvature term of the
   /// Lagrangian's Hessian at vertex i (`μi ∇²f`, 3 × 3, restricted to the tangent plane here;
   /// its 2 × 2 eigenvalues are clamped to ≥ -½ Σj wij, and to ≥ 0 if the matrix is then not
   /// positive definite). Adds the CG iterations and factorisations to the stats.
-  void solve(TrackState& s, const std::vector<Vec3f>& normals, const std::vector<float>& damping,
-             const std::vector<Sym3>& curvature, std::vector<Vec3f>& d);
+  void solve(TrackState& s, const std::vector<Vec3f>& normals, const std::vector<Sym3>& curvature,
+             std::vector<Vec3f>& d);
 
  private:
   struct Impl;
