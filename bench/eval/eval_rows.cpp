@@ -165,7 +165,8 @@ std::string markdown_table(const std::vector<Row>& rows) {
       << cell(r["mean_ms"], "%.1f") << " / " << cell(r["worst_ms"], "%.1f") << " | "
       << cell(r["capped_share"].is_number() ? json(100 * r["capped_share"].get<double>()) : json(nullptr),
               "%.0f %%")
-      << " | " << cell(r["iterations_median"], "%.0f") << " / " << cell(r["iterations_p95"], "%.0f") << " |\n";
+      << " | " << cell(r["iterations_median"], "%.0f") << " / " << cell(r["iterations_p95"], "%.0f")
+      << " |\n";
   }
   return o.str();
 }

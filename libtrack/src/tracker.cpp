@@ -189,9 +189,9 @@ TrackStats IsoSurfaceTracker::track(const FieldFunction& field, const std::vecto
         s.cg ? detail::cg_relaxation(s) : detail::jacobi_relaxation();
     detail::relax(s, *strategy);  // 2. tangential ARAP relaxation + Newton (2014 §5 stage 3, §5.2)
   }
-  detail::mark_contacts(s);     // 3. contacts: field flags, angle rule (2013 §5), folds
-  detail::smooth_contacts(s);   // 4. β-diffused Laplacian smoothing (2013 §5 eq. 7)
-  detail::repair_folds(s);      // 5. fold repair (not in the papers)
+  detail::mark_contacts(s);    // 3. contacts: field flags, angle rule (2013 §5), folds
+  detail::smooth_contacts(s);  // 4. β-diffused Laplacian smoothing (2013 §5 eq. 7)
+  detail::repair_folds(s);     // 5. fold repair (not in the papers)
   detail::collect_statistics(s);
   detail::repair_orientation(s);  // 6. orientation repair (not in the papers)
 

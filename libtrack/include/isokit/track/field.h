@@ -48,8 +48,8 @@ struct TrackStats {
   /// smaller of the largest move the last solve asked for and the last iteration's largest move;
   /// 0 for the other solvers)
   float tangential_residual{0};
-  bool converged{false};      ///< the convergence test of TrackerOptions::tolerance held before the cap
-  float max_move{0};          ///< largest vertex move in the last iteration
+  bool converged{false};   ///< the convergence test of TrackerOptions::tolerance held before the cap
+  float max_move{0};       ///< largest vertex move in the last iteration
   float max_residual{0};   ///< max |f(v) - iso_v| over vertices outside the smoothed contact region, not free
   float mean_residual{0};  ///< mean of the same
   int contact_vertices{0};    ///< vertices flagged by the field or stopped by the gradient-angle rule

@@ -64,8 +64,8 @@ struct OrientationRepairOptions {
 
 /// How the tangential ARAP energy is minimised between Newton projections (2014 §5.2).
 enum class Relaxation {
-  kJacobi,            ///< One Jacobi sweep per iteration (2014), Chebyshev-accelerated.
-  kConjugateGradient, ///< The active vertices' tangent-plane system solved by CG per iteration.
+  kJacobi,             ///< One Jacobi sweep per iteration (2014), Chebyshev-accelerated.
+  kConjugateGradient,  ///< The active vertices' tangent-plane system solved by CG per iteration.
   /// The whole tangent-plane problem of 2014 eq. 3 – 4 (`Tᵀ L T u = Tᵀ g` over every vertex, L
   /// the rest cotangent Laplacian, T the tangent bases) solved exactly at each iteration — its
   /// factorisation, analysed once per tracker, serves as the preconditioner of the next solves —
