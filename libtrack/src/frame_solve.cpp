@@ -234,12 +234,8 @@ void curvature_terms(TrackState& s, FrameScratch& f) {
     f.curvature[i] = Sym3{};
     if (f.held[i] || !held_to_iso(s, i) || s.normal[i] == Vec3f{} || s.m.adj.degree(int(i)) == 0) continue;
     const Vec3f nrm = s.normal[i];
-    const Vec3f axis =
-        std::abs(nrm.x) < 0.6f ? Vec3f{1, 0, 0} : (std::abs(nrm.y) < 0.6f ? Vec3f{0, 1, 0} : Vec3f{0, 0, 1});
-    Vec3f a = cross(nrm, axis);
-    a = a / std::sqrt(squared_norm(a));
-    u[i] = a;
-    v[i] = cross(nrm, a);
+    u[i] = perpendicular(nrm);
+    v[i] = cross(nrm, u[i]);
     h[i] = kCurvatureStep * s.m.max_step[i] / s.m.options.max_step;
     list.push_back(static_cast<int>(i));
   }

@@ -49,15 +49,14 @@ constexpr double kHoldStiffness = 1e6;
 // the Laplacian's.
 constexpr float kMinCurvature = 0.f;
 
-// Any unit vector perpendicular to the unit vector n.
+}  // namespace
+
 Vec3f perpendicular(const Vec3f& n) {
   const Vec3f axis =
       std::abs(n.x) < 0.6f ? Vec3f{1, 0, 0} : (std::abs(n.y) < 0.6f ? Vec3f{0, 1, 0} : Vec3f{0, 0, 1});
   const Vec3f t = cross(n, axis);
   return t / std::sqrt(squared_norm(t));
 }
-
-}  // namespace
 
 struct TangentSolver::Impl {
   bool ready{false};

@@ -14,6 +14,9 @@
 
 namespace isokit::track::detail {
 
+/// Any unit vector perpendicular to the unit vector n.
+Vec3f perpendicular(const Vec3f& n);
+
 /// A symmetric 3 × 3 tensor: xx, yy, zz, xy, xz, yz.
 using Sym3 = std::array<float, 6>;
 
