@@ -216,7 +216,8 @@ void evaluate_animation(Run& run, Skinner& skinner, const std::string& label, co
   if (results.empty()) return;
   const std::string dir = run.args.out + "/" + label + "/";
   const ReportContext context{describe(rig, anim), run.args.fps, int(std::thread::hardware_concurrency()),
-                              skinner.fitted().fit_seconds()};
+                              skinner.fitted().fit_seconds(),
+                              rest_agreement(skinner.fitted(), skinner.field(TreeKind::k2014))};
   const std::string metrics = metrics_json(rig, results, context);
   write_text_file(dir + file_name(anim.name) + ".metrics.json", metrics);
   for (Row& r : isokit::eval::rows_from_metrics(nlohmann::json::parse(metrics), label, anim.name, closed))

@@ -150,4 +150,84 @@ FitDistances fit_distances(const Field& field, const Rigid3d& local_to_world,
   return out;
 }
 
+namespace {
+
+double nearest_rank(std::vector<double>& v, double q) {
+  if (v.empty()) return 0;
+  const std::size_t rank = std::max<std::size_t>(std::size_t(std::ceil(q * double(v.size()))), 1);
+  const std::size_t i = std::min(v.size(), rank) - 1;
+  std::nth_element(v.begin(), v.begin() + std::ptrdiff_t(i), v.end());
+  return v[i];
+}
+
+/// Distance along the field from `x` to the level `iso` (Newton steps), infinite when the steps
+/// do not reach it.
+double distance_to_level(const Field& field, Vec3f x, float iso, const AgreementOptions& o) {
+  const Vec3f x0 = x;
+  for (int s = 0; s <= o.newton_steps; ++s) {
+    const FieldSample f = field.eval(x);
+    if (std::abs(f.value - iso) < o.tolerance) return double(norm(x - x0));
+    const float g2 = dot(f.gradient, f.gradient);
+    if (s == o.newton_steps || !(g2 > 1e-20f) || !std::isfinite(g2)) break;
+    x = x + f.gradient * ((iso - f.value) / g2);
+  }
+  return std::numeric_limits<double>::infinity();
+}
+
+}  // namespace
+
+std::vector<Vec3d> area_weighted_normals(const std::vector<Vec3d>& vertices,
+                                         const std::vector<std::array<int, 3>>& triangles) {
+  std::vector<Vec3d> n(vertices.size());
+  const int nv = int(vertices.size());
+  for (std::size_t t = 0; t < triangles.size(); ++t) {
+    const auto& tri = triangles[t];
+    for (int k = 0; k < 3; ++k)
+      require(tri[k] >= 0 && tri[k] < nv, "area_weighted_normals: triangle " + std::to_string(t),
+              "indexes vertex " + std::to_string(tri[k]) + " of " + std::to_string(nv), "fix the indices");
+    const Vec3d c = cross(vertices[tri[1]] - vertices[tri[0]], vertices[tri[2]] - vertices[tri[0]]);
+    for (int k = 0; k < 3; ++k) n[static_cast<std::size_t>(tri[k])] += c;
+  }
+  return n;
+}
+
+FieldAgreement field_agreement(const Field& field, const Rigid3d& local_to_world, const std::vector<Vec3d>& points,
+                               const std::vector<Vec3d>& normals, float iso, const AgreementOptions& o) {
+  require(points.size() == normals.size(), "field_agreement",
+          std::to_string(points.size()) + " points but " + std::to_string(normals.size()) + " normals",
+          "pass one normal per point");
+  require(o.angle_limit_deg > 0 && o.angle_limit_deg <= 180, "AgreementOptions::angle_limit_deg",
+          "must be in (0, 180]", "use the default 60");
+  require(o.newton_steps >= 1 && o.newton_steps <= 100, "AgreementOptions::newton_steps", "must be in [1, 100]",
+          "use the default 8");
+  require(o.tolerance > 0, "AgreementOptions::tolerance", "must be > 0", "use the default 1e-4");
+  std::vector<double> angles, distances;
+  FieldAgreement out;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const Vec3d n = local_to_world.rotate_inverse(normals[i]);
+    const double nl = norm(n);
+    if (!(nl > 0)) continue;
+    const Vec3d l = local_to_world.apply_inverse(points[i]);
+    const Vec3f p{float(l.x), float(l.y), float(l.z)};
+    const FieldSample f = field.eval(p);
+    const Vec3d g{f.gradient.x, f.gradient.y, f.gradient.z};
+    const double gl = norm(g);
+    double angle = 180;
+    if (gl > 1e-20 && std::isfinite(gl))
+      angle = std::acos(std::clamp(-dot(g, n) / (gl * nl), -1.0, 1.0)) * 180.0 / kPi;
+    angles.push_back(angle);
+    if (angle > o.angle_limit_deg) ++out.over_limit;
+    distances.push_back(distance_to_level(field, p, iso, o));
+  }
+  out.points = int(angles.size());
+  if (angles.empty()) return out;
+  out.angle_max = *std::max_element(angles.begin(), angles.end());
+  out.distance_max = *std::max_element(distances.begin(), distances.end());
+  out.angle_p95 = nearest_rank(angles, 0.95);
+  out.angle_p50 = nearest_rank(angles, 0.5);
+  out.distance_p95 = nearest_rank(distances, 0.95);
+  out.distance_p50 = nearest_rank(distances, 0.5);
+  return out;
+}
+
 }  // namespace isokit::implicit

@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <string>
+#include <utility>
 
 #include "isokit/core/error.h"
 
@@ -16,20 +17,34 @@ std::string box_text(const Box3f& b) {
   return "[" + v(b.lo) + " .. " + v(b.hi) + "]";
 }
 
+void check_grid(int n, const Box3f& box) {
+  require(n >= 2 && n <= GridField::kMaxResolution, "GridField resolution",
+          "must be in [2, " + std::to_string(GridField::kMaxResolution) + "] (got " + std::to_string(n) + ")",
+          "use the paper's 32, or another resolution in range");
+  bool finite = true;
+  for (int a = 0; a < 3; ++a) finite = finite && std::isfinite(box.lo[a]) && std::isfinite(box.hi[a]);
+  require(finite, "GridField box", "is not finite " + box_text(box),
+          "pass a finite box (or a source with a finite support)");
+  require(!box.empty() && box.hi.x > box.lo.x && box.hi.y > box.lo.y && box.hi.z > box.lo.z, "GridField box",
+          "is empty or flat " + box_text(box), "pass a box with positive extent on every axis");
+}
+
 }  // namespace
+
+GridField::GridField(int resolution, const Box3f& box, std::vector<float> nodes)
+    : n_(resolution), box_(box), nodes_(std::move(nodes)) {
+  check_grid(n_, box_);
+  const std::size_t n = static_cast<std::size_t>(n_);
+  require(nodes_.size() == 4 * n * n * n, "GridField nodes",
+          "holds " + std::to_string(nodes_.size()) + " floats for " + std::to_string(n_) + "^3 nodes",
+          "pass 4 floats (value, gradient) per node");
+  for (float v : nodes_)
+    require(std::isfinite(v), "GridField nodes", "hold a non-finite value", "compute finite node data");
+}
 
 GridField::GridField(const Field& source, const Box3f& box, const GridFieldOptions& options)
     : n_(options.resolution), box_(box.empty() ? source.support() : box) {
-  require(n_ >= 2 && n_ <= kMaxResolution, "GridField resolution",
-          "must be in [2, " + std::to_string(kMaxResolution) + "] (got " + std::to_string(n_) + ")",
-          "use the paper's 32, or another resolution in range");
-  bool finite = true;
-  for (int a = 0; a < 3; ++a) finite = finite && std::isfinite(box_.lo[a]) && std::isfinite(box_.hi[a]);
-  require(finite, "GridField box", "is not finite " + box_text(box_),
-          "pass a finite box (or a source with a finite support)");
-  require(!box_.empty() && box_.hi.x > box_.lo.x && box_.hi.y > box_.lo.y && box_.hi.z > box_.lo.z,
-          "GridField box", "is empty or flat " + box_text(box_),
-          "pass a box with positive extent on every axis");
+  check_grid(n_, box_);
   const Box3f src = source.support();
   require(box_.contains(src), "GridField box",
           box_text(box_) + " does not contain the source support " + box_text(src),

@@ -92,7 +92,7 @@ TEST_CASE("bake job: fit warnings name under-resolved parts, outputs are written
   const fs::path dir = fs::temp_directory_path() / "isokit-test-bake-job";
   fs::remove_all(dir);
   BakeOutputs out{(dir / "a" / "x.glb").string(), (dir / "m.json").string(), "", (dir / "ply").string(), ""};
-  const ReportContext ctx{"test", 30, 1, 0};
+  const ReportContext ctx{"test", 30, 1, 0, std::nullopt};
   const std::vector<std::string> written = write_bake_outputs(sk.rig(), results, results[0], ctx, {}, out);
   CHECK(written.size() == 3);
   CHECK(fs::file_size(out.glb) > 0);
@@ -182,7 +182,7 @@ TEST_CASE("bake job: --pc2 writes the baked positions in the file's vertex order
   fs::remove_all(dir);
   BakeOutputs out;
   out.pc2 = (dir / "sub" / "bend.pc2").string();
-  const ReportContext ctx{"test", 30, 1, 0};
+  const ReportContext ctx{"test", 30, 1, 0, std::nullopt};
   const std::vector<std::string> written = write_bake_outputs(rig, results, results[0], ctx, {}, out);
   REQUIRE(written.size() == 1);
   CHECK(written[0] == out.pc2 + " (5 frames)");

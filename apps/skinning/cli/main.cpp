@@ -83,7 +83,31 @@ void print_info(const Rig& rig, const std::string& spec) {
 // `info --fit`: what the fit made of every joint: its vertices, the rule that gave them a field,
 // the fit distances both ways and the rest vertices of other joints inside its primitive
 // (docs/skinning.md, "Checking a fit").
-void print_fit(const FittedRig& fitted) {
+// `info --fit`: the agreement of each part's own field and of the composed 2014 field with the
+// rest mesh (what the tracker follows, docs/skinning.md "Checking a fit").
+void print_agreement(const FitQuality& q, const FittedRig& fitted, Skinner& skinner) {
+  const Rig& rig = fitted.rig();
+  const double pct = q.diagonal > 0 ? 100.0 / q.diagonal : 0;
+  std::printf("agreement at rest (angle of -grad f to the vertex normal, degrees; distance to the 0.5 level, %%diag):\n");
+  std::printf("  %-24s %-8s %6s %6s %6s %5s   %8s %8s %8s\n", "joint", "field", "p50", "p95", "max", " >60",
+              "dist p50", "p95", "max");
+  auto row = [&](const char* name, const char* kind, const isokit::implicit::FieldAgreement& a) {
+    std::printf("  %-24s %-8s %6.1f %6.1f %6.1f %5d   %8.3f %8.3f %8.3f\n", name, kind, a.angle_p50, a.angle_p95,
+                a.angle_max, a.over_limit, a.distance_p50 * pct, a.distance_p95 * pct, a.distance_max * pct);
+  };
+  for (const PartQuality& p : q.parts) {
+    const BonePart& b = fitted.bones()[static_cast<std::size_t>(p.joint)];
+    row(rig.joints[static_cast<std::size_t>(p.joint)].name.c_str(), to_string(b.rule), p.agreement);
+  }
+  const RestAgreement ra = rest_agreement(fitted, skinner.field(TreeKind::k2014));
+  row("composed (2014 tree)", "", ra.composed);
+  std::printf("  inverted triangles at rest: %d of %d (%.2f %%); open panels: %d (%d vertices, left out); "
+              "unrelated vertices inside primitives: %d\n",
+              ra.inverted_triangles, ra.triangles, ra.triangles ? 100.0 * ra.inverted_triangles / ra.triangles : 0.0,
+              ra.open_panels, ra.panel_vertices, ra.unrelated_inside);
+}
+
+FitQuality print_fit(const FittedRig& fitted) {
   const Rig& rig = fitted.rig();
   const FitQuality q = fit_quality(fitted);
   std::vector<const PartQuality*> part(rig.joints.size(), nullptr);
@@ -120,6 +144,7 @@ void print_fit(const FittedRig& fitted) {
       "   other joint; many unrelated vertices mean a primitive reaching where it should not)\n",
       100 * q.worst_to_surface_p95(), 100 * q.worst_to_surface_max(), 100 * q.worst_from_surface_p95(),
       100 * q.worst_from_surface_max(), q.diagonal, q.unrelated_inside());
+  return q;
 }
 
 // `info --fit`: the operator of every fitted joint in both trees (no grid is generated):
@@ -259,9 +284,10 @@ int run_info(const Args& a, const Progress& progress) {
   Rig rig = open_and_warn(a, progress);
   print_info(rig, a.rig);
   if (a.info_fit) {
-    const Skinner skinner(std::move(rig), a.info_setup.empty() ? SkinSetup{} : load_setup(a.info_setup),
+    Skinner skinner(std::move(rig), a.info_setup.empty() ? SkinSetup{} : load_setup(a.info_setup),
                           progress);
-    print_fit(skinner.fitted());
+    const FitQuality q = print_fit(skinner.fitted());
+    print_agreement(q, skinner.fitted(), skinner);
     print_operators(skinner.fitted(), skinner.setup());
   }
   return 0;
@@ -302,7 +328,8 @@ int run_bake(const Args& a, const std::vector<Method>& methods, Method main, con
   }
   const BakeResult& written = main_result(results, main);
   const ReportContext ctx{animation.description, a.fps, static_cast<int>(std::thread::hardware_concurrency()),
-                          skinner.fitted().fit_seconds()};
+                          skinner.fitted().fit_seconds(),
+                          rest_agreement(skinner.fitted(), skinner.field(TreeKind::k2014))};
   std::vector<RenderView> views;
   if (!a.outputs.render_dir.empty())
     views = bend_views(rig, skinner.fitted().partition(), animation.bends, animation.poses,

@@ -5,6 +5,8 @@
 #include <array>
 
 #include "isokit/core/mesh_quality.h"
+#include "isokit/implicit/program_field.h"
+#include "isokit/skinning/mesh_closure.h"
 
 namespace isokit::skinning {
 
@@ -63,6 +65,78 @@ int FitQuality::unrelated_inside() const {
   return n;
 }
 
+namespace {
+
+std::vector<Vec3d> rest_points(const Rig& r) {
+  std::vector<Vec3d> p(static_cast<std::size_t>(r.rest.rows()));
+  for (Eigen::Index v = 0; v < r.rest.rows(); ++v) p[static_cast<std::size_t>(v)] = {r.rest(v, 0), r.rest(v, 1), r.rest(v, 2)};
+  return p;
+}
+
+std::vector<std::array<int, 3>> triangle_list(const Rig& r) {
+  std::vector<std::array<int, 3>> t(static_cast<std::size_t>(r.triangles.rows()));
+  for (Eigen::Index f = 0; f < r.triangles.rows(); ++f)
+    t[static_cast<std::size_t>(f)] = {r.triangles(f, 0), r.triangles(f, 1), r.triangles(f, 2)};
+  return t;
+}
+
+}  // namespace
+
+std::vector<std::uint8_t> open_panel_vertices(const Rig& rig, int* panels) {
+  const MeshClosure closure = mesh_closure(rig.triangles, rig.rest.rows());
+  const std::vector<Vec3d> p = rest_points(rig);
+  std::vector<Vec3d> vector_area(closure.components.size());
+  std::vector<double> area(closure.components.size(), 0);
+  for (Eigen::Index f = 0; f < rig.triangles.rows(); ++f) {
+    const std::size_t c = static_cast<std::size_t>(closure.component[static_cast<std::size_t>(f)]);
+    const Vec3d n = cross(p[rig.triangles(f, 1)] - p[rig.triangles(f, 0)], p[rig.triangles(f, 2)] - p[rig.triangles(f, 0)]);
+    vector_area[c] += n * 0.5;
+    area[c] += 0.5 * norm(n);
+  }
+  std::vector<char> panel(closure.components.size(), 0);
+  int count = 0;
+  for (std::size_t c = 0; c < panel.size(); ++c) {
+    panel[c] = closure.components[c].border_edges > 0 && norm(vector_area[c]) >= 0.3 * area[c] ? 1 : 0;
+    count += panel[c];
+  }
+  if (panels) *panels = count;
+  std::vector<std::uint8_t> out(p.size(), 0);
+  for (Eigen::Index f = 0; f < rig.triangles.rows(); ++f)
+    if (panel[static_cast<std::size_t>(closure.component[static_cast<std::size_t>(f)])])
+      for (int k = 0; k < 3; ++k) out[static_cast<std::size_t>(rig.triangles(f, k))] = 1;
+  return out;
+}
+
+RestAgreement rest_agreement(const FittedRig& fitted, const SkinField& field) {
+  const Rig& r = fitted.rig();
+  RestAgreement out;
+  const std::vector<std::uint8_t> panel = open_panel_vertices(r, &out.open_panels);
+  const std::vector<Vec3d> p = rest_points(r);
+  const std::vector<std::array<int, 3>> tris = triangle_list(r);
+  const std::vector<Vec3d> normals = implicit::area_weighted_normals(p, tris);
+  std::vector<Vec3d> kept, kept_normals;
+  for (std::size_t v = 0; v < p.size(); ++v) {
+    if (panel[v]) {
+      ++out.panel_vertices;
+      continue;
+    }
+    kept.push_back(p[v]);
+    kept_normals.push_back(normals[v]);
+  }
+  const implicit::ProgramField composed(field.shared_program(), field.rest_pose());
+  out.composed = implicit::field_agreement(composed, Rigid3d{}, kept, kept_normals);
+  for (const auto& t : tris) {
+    if (panel[static_cast<std::size_t>(t[0])]) continue;
+    ++out.triangles;
+    const Vec3d c = (p[t[0]] + p[t[1]] + p[t[2]]) * (1.0 / 3.0);
+    const Vec3d n = cross(p[t[1]] - p[t[0]], p[t[2]] - p[t[0]]);
+    const implicit::FieldSample s = composed.eval({float(c.x), float(c.y), float(c.z)});
+    if (n.x * s.gradient.x + n.y * s.gradient.y + n.z * s.gradient.z > 0) ++out.inverted_triangles;
+  }
+  for (const PrimitiveCoverage& c : primitive_coverage(fitted)) out.unrelated_inside += c.unrelated;
+  return out;
+}
+
 FitQuality fit_quality(const FittedRig& fitted, const implicit::FitDistanceOptions& options) {
   const Rig& r = fitted.rig();
   const std::vector<BonePart>& bones = fitted.bones();
@@ -74,6 +148,8 @@ FitQuality fit_quality(const FittedRig& fitted, const implicit::FitDistanceOptio
   for (int j : fitted.partition())
     if (!bones[static_cast<std::size_t>(j)].fitted) ++out.vertices_without_field;
   const std::vector<PrimitiveCoverage> coverage = primitive_coverage(fitted);
+  const std::vector<Vec3d> all_points = rest_points(r);
+  const std::vector<Vec3d> all_normals = implicit::area_weighted_normals(all_points, triangle_list(r));
   std::size_t k = 0;
   for (const BonePart& b : bones) {
     if (!b.fitted) continue;
@@ -96,6 +172,10 @@ FitQuality fit_quality(const FittedRig& fitted, const implicit::FitDistanceOptio
                              [&](const BonePart* o) { return inside(*o, w); });
         },
         options);
+    std::vector<Vec3d> own, own_normals;
+    for (std::size_t v = 0; v < all_points.size(); ++v)
+      if (fitted.partition()[v] == b.joint) own.push_back(all_points[v]), own_normals.push_back(all_normals[v]);
+    q.agreement = implicit::field_agreement(*b.fit.field(), b.fit.local_to_world, own, own_normals);
     out.parts.push_back(q);
   }
   return out;

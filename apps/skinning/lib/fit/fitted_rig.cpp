@@ -13,6 +13,7 @@
 #include <utility>
 
 #include "isokit/core/error.h"
+#include "isokit/core/parallel.h"
 #include "isokit/implicit/fit_quality.h"
 #include "isokit/implicit/skeleton.h"
 #include "isokit/operators/biharmonic.h"
@@ -98,6 +99,8 @@ struct JointParts {
   std::vector<std::vector<int>> triangles;              ///< per joint: its triangles
   std::vector<int> count;                               ///< per joint: its vertices
   std::vector<std::vector<int>> children;               ///< per joint: its child joints
+  std::vector<Eigen::Vector3d> normals;                 ///< per vertex: unit area-weighted normal (rest)
+  std::vector<double> edge;                             ///< per vertex: mean length of its edges (rest)
 
   /// Nearest ancestor of `j` with vertices (-1: none): a part to close the start against.
   int ancestor_with_vertices(int j) const {
@@ -114,7 +117,7 @@ JointParts joint_parts(const Rig& r, const std::vector<Eigen::Vector3d>& jp,
                        const std::vector<int>& partition) {
   const int nv = static_cast<int>(r.rest.rows());
   const int nj = static_cast<int>(r.joints.size());
-  JointParts parts{r, jp, partition, {}, {}, {}};
+  JointParts parts{r, jp, partition, {}, {}, {}, {}, {}};
   parts.triangles.resize(static_cast<std::size_t>(nj));
   for (Eigen::Index f = 0; f < r.triangles.rows(); ++f) {
     const int a = partition[r.triangles(f, 0)], b = partition[r.triangles(f, 1)],
@@ -124,6 +127,25 @@ JointParts joint_parts(const Rig& r, const std::vector<Eigen::Vector3d>& jp,
   }
   parts.count.assign(static_cast<std::size_t>(nj), 0);
   for (int v = 0; v < nv; ++v) ++parts.count[partition[v]];
+  parts.normals.assign(static_cast<std::size_t>(nv), Eigen::Vector3d::Zero());
+  parts.edge.assign(static_cast<std::size_t>(nv), 0.0);
+  std::vector<int> edges(static_cast<std::size_t>(nv), 0);
+  for (Eigen::Index f = 0; f < r.triangles.rows(); ++f) {
+    Eigen::Vector3d q[3];
+    for (int k = 0; k < 3; ++k) q[k] = r.rest.row(r.triangles(f, k)).transpose().cast<double>();
+    const Eigen::Vector3d n = (q[1] - q[0]).cross(q[2] - q[0]);
+    for (int k = 0; k < 3; ++k) {
+      const std::size_t v = static_cast<std::size_t>(r.triangles(f, k));
+      parts.normals[v] += n;
+      parts.edge[v] += (q[(k + 1) % 3] - q[k]).norm() + (q[(k + 2) % 3] - q[k]).norm();
+      edges[v] += 2;
+    }
+  }
+  for (int v = 0; v < nv; ++v) {
+    const double l = parts.normals[v].norm();
+    if (l > 0) parts.normals[v] /= l;
+    if (edges[v] > 0) parts.edge[v] /= edges[v];
+  }
   parts.children.resize(static_cast<std::size_t>(nj));
   for (int j = 0; j < nj; ++j)
     if (r.joints[j].parent >= 0) parts.children[r.joints[j].parent].push_back(j);
@@ -208,6 +230,61 @@ implicit::MeshPart part_mesh(const JointParts& parts, int j, const std::string& 
     part.triangles.push_back(t);
   }
   return part;
+}
+
+/// The part's triangles and `rings` rings of its neighbours' triangles around them (each ring:
+/// the triangles sharing a vertex with the set), over locally numbered rest vertices. The part's
+/// own vertices keep their place first (what the distance field follows across its border). A
+/// vertex of ring k is moved `k × sink` of its mean edge length inwards along its normal, so
+/// that across the border the neighbour's field, not this one, holds the neighbour's vertices.
+void add_overlap_rings(const JointParts& parts, int j, int rings, double sink, implicit::MeshPart& part) {
+  const Rig& r = parts.rig;
+  const std::size_t nv = static_cast<std::size_t>(r.rest.rows());
+  std::vector<char> in_set(static_cast<std::size_t>(r.triangles.rows()), 0), vertex_in(nv, 0);
+  for (int f : parts.triangles[static_cast<std::size_t>(j)]) {
+    in_set[static_cast<std::size_t>(f)] = 1;
+    for (int k = 0; k < 3; ++k) vertex_in[static_cast<std::size_t>(r.triangles(f, k))] = 1;
+  }
+  std::vector<int> local(nv, -1);
+  {
+    // The numbering part_mesh gave (first use in the joint's triangles).
+    int next = 0;
+    for (int f : parts.triangles[static_cast<std::size_t>(j)])
+      for (int k = 0; k < 3; ++k) {
+        int& l = local[static_cast<std::size_t>(r.triangles(f, k))];
+        if (l < 0) l = next++;
+      }
+  }
+  for (int ring = 0; ring < rings; ++ring) {
+    std::vector<int> added;
+    for (Eigen::Index f = 0; f < r.triangles.rows(); ++f) {
+      if (in_set[static_cast<std::size_t>(f)]) continue;
+      for (int k = 0; k < 3; ++k)
+        if (vertex_in[static_cast<std::size_t>(r.triangles(f, k))]) {
+          added.push_back(static_cast<int>(f));
+          break;
+        }
+    }
+    if (added.empty()) break;
+    for (int f : added) {
+      in_set[static_cast<std::size_t>(f)] = 1;
+      std::array<int, 3> t{};
+      for (int k = 0; k < 3; ++k) {
+        const int v = r.triangles(f, k);
+        vertex_in[static_cast<std::size_t>(v)] = 1;
+        int& l = local[static_cast<std::size_t>(v)];
+        if (l < 0) {
+          l = static_cast<int>(part.vertices.size());
+          const Eigen::Vector3d q = r.rest.row(v).transpose().cast<double>() -
+                                    parts.normals[static_cast<std::size_t>(v)] *
+                                        ((ring + 1) * sink * parts.edge[static_cast<std::size_t>(v)]);
+          part.vertices.push_back({q.x(), q.y(), q.z()});
+        }
+        t[static_cast<std::size_t>(k)] = l;
+      }
+      part.triangles.push_back(t);
+    }
+  }
 }
 
 /// Step 2, branching parts (2013 §4.1 closes every joint of a part; docs/skinning.md "Decision:
@@ -390,6 +467,22 @@ bool fit_joint(const JointParts& parts, const SkinSetup& setup, int j, bool refi
   const auto [seg0, seg1] = place_bone_segment(parts, j, refit, part, o);
   b.start = seg0;
   b.end = seg1;
+  if (o.field == implicit::PartFitOptions::FieldKind::distance) {
+    // The part's own closed surface (all its triangles: a patch of a neighbour's skin is skin the
+    // field must follow too, and rings of the neighbours' across its border); where it cannot
+    // give a field, the HRBF tries below.
+    try {
+      implicit::MeshPart overlapping = part;
+      add_overlap_rings(parts, j, o.distance.overlap_rings, o.distance.overlap_sink, overlapping);
+      b.fit = implicit::fit_part(overlapping, o);
+      b.fitted = true;
+      b.rule = FitRule::distance;
+      return true;
+    } catch (const InputError& e) {
+      b.error = e.what();
+      o.field = implicit::PartFitOptions::FieldKind::hrbf;
+    }
+  }
   fit_with_retries(part, o, setup.max_fit_error, seg0, seg1, b);
   return true;
 }
@@ -475,11 +568,19 @@ FittedRig::FittedRig(const Rig& rig, const SkinSetup& setup, const Progress& pro
       if (!merge_failed_fits(r, bones_, partition_, refit)) break;
     }
     const JointParts parts = joint_parts(r, jp, partition_);
+    // The joints' fits are independent: one task each (the result does not depend on the order).
     int done = 0;
-    for (int j = 0; j < nj; ++j) {
-      if (pass == 1 && !refit[j]) continue;
-      if (fit_joint(parts, setup, j, refit[j] != 0, bones_[j]) && progress) progress("fit", ++done, nj);
-    }
+    std::mutex report;
+    parallel_for(static_cast<std::size_t>(nj), 1, [&](std::size_t begin, std::size_t end) {
+      for (std::size_t jj = begin; jj < end; ++jj) {
+        const int j = static_cast<int>(jj);
+        if (pass == 1 && !refit[jj]) continue;
+        if (fit_joint(parts, setup, j, refit[jj] != 0, bones_[jj]) && progress) {
+          const std::lock_guard<std::mutex> lock(report);
+          progress("fit", ++done, nj);
+        }
+      }
+    });
     if (pass == 0) first = bones_, first_partition = partition_;
   }
   undo_failed_merges(first, first_partition, bones_, partition_);
@@ -576,6 +677,8 @@ const char* to_string(FitRule rule) {
       return "hrbf strict";
     case FitRule::hrbf_open:
       return "hrbf open";
+    case FitRule::distance:
+      return "distance";
     case FitRule::shared:
       return "shared";
     case FitRule::capsule:

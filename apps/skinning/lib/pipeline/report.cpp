@@ -109,6 +109,24 @@ std::string metrics_json(const Rig& rig, const std::vector<BakeResult>& results,
   j["fps"] = c.fps;
   j["threads"] = c.threads;
   j["fit_seconds"] = c.fit_seconds;
+  if (c.agreement) {
+    const RestAgreement& a = *c.agreement;
+    json ra;
+    ra["vertices"] = a.composed.points;
+    ra["angle_p50_deg"] = num(a.composed.angle_p50);
+    ra["angle_p95_deg"] = num(a.composed.angle_p95);
+    ra["angle_max_deg"] = num(a.composed.angle_max);
+    ra["over_60_deg"] = a.composed.over_limit;
+    ra["distance_p50"] = num(a.composed.distance_p50);
+    ra["distance_p95"] = num(a.composed.distance_p95);
+    ra["distance_max"] = num(a.composed.distance_max);
+    ra["triangles"] = a.triangles;
+    ra["inverted_triangles"] = a.inverted_triangles;
+    ra["open_panels"] = a.open_panels;
+    ra["panel_vertices"] = a.panel_vertices;
+    ra["unrelated_inside"] = a.unrelated_inside;
+    j["rest_agreement"] = ra;
+  }
   const MeshClosure closure = mesh_closure(rig.triangles, rig.rest.rows());
   j["closed"] = closure.closed();
   j["components"] = components_json(closure);

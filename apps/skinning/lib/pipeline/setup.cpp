@@ -201,13 +201,57 @@ void read_joints(const json& js, const std::string& source, const std::string& b
   }
 }
 
-/// Section `fit`: the HRBF fit of each part (implicit::PartFitOptions).
+/// Section `fit.distance`: the distance field of each part (implicit::DistanceFitOptions).
+void read_distance_fit(const json& d, const std::string& w, implicit::DistanceFitOptions& o) {
+  check_keys(d,
+             {"cells_per_feature", "feature_percentile", "min_resolution", "max_resolution", "cap_height",
+              "width_percentile", "overlap_rings", "overlap_sink"},
+             w);
+  read(d, "cells_per_feature", o.cells_per_feature, w);
+  read(d, "feature_percentile", o.feature_percentile, w);
+  read(d, "min_resolution", o.min_resolution, w);
+  read(d, "max_resolution", o.max_resolution, w);
+  read(d, "cap_height", o.cap_height, w);
+  read(d, "width_percentile", o.width_percentile, w);
+  read(d, "overlap_rings", o.overlap_rings, w);
+  read(d, "overlap_sink", o.overlap_sink, w);
+  require(std::isfinite(o.overlap_sink) && o.overlap_sink >= 0 && o.overlap_sink <= 1, w + ".overlap_sink",
+          "must be in [0, 1] (got " + format_number(o.overlap_sink) + ")", "use 0.2 (the default)");
+  require(o.overlap_rings >= 0 && o.overlap_rings <= 8, w + ".overlap_rings",
+          "must be in [0, 8] (got " + std::to_string(o.overlap_rings) + ")", "use 1 (the default)");
+  require(std::isfinite(o.cells_per_feature) && o.cells_per_feature >= 1 && o.cells_per_feature <= 16,
+          w + ".cells_per_feature", "must be in [1, 16] (got " + format_number(o.cells_per_feature) + ")",
+          "use 3 (the default)");
+  require(std::isfinite(o.feature_percentile) && o.feature_percentile > 0 && o.feature_percentile < 1,
+          w + ".feature_percentile", "must be in (0, 1) (got " + format_number(o.feature_percentile) + ")",
+          "use 0.25 (the default)");
+  require(std::isfinite(o.width_percentile) && o.width_percentile > 0 && o.width_percentile <= 1,
+          w + ".width_percentile", "must be in (0, 1] (got " + format_number(o.width_percentile) + ")",
+          "use 0.9 (the default)");
+  require(o.min_resolution >= 8 && o.max_resolution <= 256 && o.min_resolution <= o.max_resolution,
+          w + ".min_resolution / max_resolution",
+          "need 8 <= min_resolution <= max_resolution <= 256 (got " + std::to_string(o.min_resolution) + ", " +
+              std::to_string(o.max_resolution) + ")",
+          "use 32 and 64 (the defaults)");
+  require(std::isfinite(o.cap_height) && o.cap_height >= 0 && o.cap_height <= 2, w + ".cap_height",
+          "must be in [0, 2] (got " + format_number(o.cap_height) + ")", "use 1 (the default)");
+}
+
+/// Section `fit`: the fit of each part (implicit::PartFitOptions).
 void read_fit(const json& f, const std::string& w, implicit::PartFitOptions& fit, double& capsule_match,
               double& max_fit_error) {
   check_keys(f,
              {"samples", "cull_h", "grid_resolution", "seed", "grid", "opening_offset", "closure",
-              "cap_height", "capsule_match", "max_error"},
+              "cap_height", "capsule_match", "max_error", "field", "distance"},
              w);
+  if (f.contains("field")) {
+    const json& k = f.at("field");
+    require(k.is_string() && (k == "hrbf" || k == "distance"), w + ".field",
+            "must be \"hrbf\" or \"distance\" (got " + k.dump() + ")",
+            "use \"distance\" (the default: the part's own surface) or \"hrbf\" (2013 §4.1, the paper preset)");
+    fit.field = k == "hrbf" ? implicit::PartFitOptions::FieldKind::hrbf : implicit::PartFitOptions::FieldKind::distance;
+  }
+  if (f.contains("distance")) read_distance_fit(f.at("distance"), w + ".distance", fit.distance);
   read(f, "capsule_match", capsule_match, w);
   require(std::isfinite(capsule_match) && capsule_match >= 0 && capsule_match <= 10, w + ".capsule_match",
           "must be in [0, 10] (got " + format_number(capsule_match) + ")",
@@ -405,6 +449,7 @@ void read_substeps(const json& p, const std::string& w, SubstepOptions& substeps
 }  // namespace
 
 void apply_paper_preset(SkinSetup& s) {
+  s.fit.field = implicit::PartFitOptions::FieldKind::hrbf;
   s.fit.closure = implicit::PartFitOptions::Closure::joints;
   s.max_fit_error = 0;
   s.capsule_match = 0;

@@ -44,6 +44,45 @@ struct MeshPart {
   std::vector<Opening> openings;
 };
 
+/// Options of the distance field of a part (`PartFitOptions::Field::distance`; not in the papers:
+/// docs/decisions/part-fields-from-the-mesh.md). The part's triangles, closed by a dome over each
+/// border loop, give a signed distance `d` (negative inside) sampled on a grid in the bone frame;
+/// the field is `t_r(d)` (the 2013 remap) with the gradient `t_r'(d) ∇d` (∇d by central
+/// differences of the sampled `d`), so its 0.5 iso-surface is the part's own skin.
+struct DistanceFitOptions {
+  /// Grid cells across the part's thinnest feature, in [1, 16]: the grid spacing is the
+  /// `feature_percentile` thickness of the part (inward ray from a vertex along its normal to
+  /// the far side) divided by this. Default 3.
+  double cells_per_feature = 3.0;
+  /// Percentile of the per-vertex thicknesses taken as the part's thinnest feature, in (0, 1).
+  /// Default 0.25 (a quarter of the sampled vertices lie on thinner features: a few rays that
+  /// hit a neighbouring fold early do not set the grid).
+  double feature_percentile = 0.25;
+  /// Grid nodes per axis, at least (the 2013 paper's 32) and at most: the memory is
+  /// 16 bytes × n³ (32: 0.5 MiB, 64: 4 MiB, 96: 13.5 MiB, 128: 32 MiB). Defaults 32 and 64; both in
+  /// [8, GridField::kMaxResolution] with min <= max.
+  int min_resolution = 32;
+  int max_resolution = 64;
+  /// Height of the dome closing each border loop, as a fraction of the loop's radius times the
+  /// cosine between the loop's outward normal and the bone (a hole at a bone end gets a half
+  /// sphere, tangent to a tube's wall; a hole in the side a flat cap), in [0, 2]. Default 1.
+  double cap_height = 1.0;
+  /// The `r` of `t_r` (how far the field reaches out of the surface, and the depth at which it
+  /// saturates at 1) is half the `width_percentile` thickness, in (0, 1]. Default 0.9 (about the
+  /// part's radius on a limb: the field grades its whole inside).
+  double width_percentile = 0.9;
+  /// Rings of the neighbouring parts' triangles a part takes beyond its border before it is
+  /// closed, in [0, 8] (read by the caller that cuts a mesh into parts: isokit-skin's FittedRig).
+  /// With 0 the dome starts at the part's border and bends away from the skin there; with 1 or
+  /// more the field follows the skin across the border and neighbouring fields agree there.
+  /// Default 1.
+  int overlap_rings = 1;
+  /// How far the k-th overlap ring sinks below the skin: k × this × the vertex's mean edge
+  /// length, along its inward normal, in [0, 1] (so that across the border the neighbour's own
+  /// field holds its vertices, and the two surfaces do not meet in a crease). Default 0.1.
+  double overlap_sink = 0.1;
+};
+
 struct PartFitOptions {
   /// Poisson-disk samples wanted, in [4, 10000] (2013 §4.1: "50 ... always sufficient").
   int target_samples = 50;
@@ -82,6 +121,13 @@ struct PartFitOptions {
   bool sample_grid = true;   ///< also sample the field into a grid (2013 §6: 32³ textures)
   int grid_resolution = 32;  ///< grid nodes per axis, in [2, GridField::kMaxResolution] (2013 §6: 32)
   HrbfOptions hrbf{};        ///< the HRBF fit's options (hrbf.h)
+  /// The kind of field a part gets:
+  /// - `hrbf` (default; 2013 §4.1): an HRBF through ~`target_samples` Poisson-disk samples;
+  /// - `distance` (not in the papers): the signed distance to the part's own closed surface
+  ///   (`distance`); the HRBF options above are not used, `sample_grid` neither (always a grid).
+  enum class FieldKind { hrbf, distance };
+  FieldKind field = FieldKind::hrbf;
+  DistanceFitOptions distance{};  ///< the distance field's options (FieldKind::distance)
 };
 
 /// The fitted primitive. `local` is in the bone frame: origin `bone_start`, +z along the bone
@@ -105,7 +151,16 @@ struct FittedPart {
 /// aligned with the bone (made orthogonal).
 Rigid3d bone_frame(const Vec3d& a, const Vec3d& b);
 
-/// Fits one part. \throw InputError naming `part.name`: zero-length bone, empty part, indices
+/// The distance field of one part (`PartFitOptions::FieldKind::distance`, whatever `field`
+/// says): the part's triangles closed by a dome over each border loop, their signed distance
+/// sampled on a grid whose resolution follows the part's thinnest feature, remapped by `t_r`.
+/// `r` is half the part's `width_percentile` thickness; `samples` stays empty and
+/// `closure_points` counts the domes. \throw InputError naming `part.name`: zero-length bone,
+/// empty part, indices out of range, non-finite vertices, options out of range, or a closed
+/// surface with no inside.
+FittedPart fit_part_distance(const MeshPart& part, const PartFitOptions& options = {});
+
+/// Fits one part (`options.field`: HRBF or distance field). \throw InputError naming `part.name`: zero-length bone, empty part, indices
 /// out of range, non-finite vertices, fewer than 4 usable samples, inward-oriented triangles (the
 /// samples' normals point towards the bone on average), or a failed HRBF fit.
 FittedPart fit_part(const MeshPart& part, const PartFitOptions& options = {});

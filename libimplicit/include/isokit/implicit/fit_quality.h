@@ -52,6 +52,37 @@ FitDistances fit_distances(const Field& field, const Rigid3d& local_to_world,
                            const std::function<bool(const Vec3d&)>& exclude = {},
                            const FitDistanceOptions& options = {});
 
+/// What the tracker needs from a field at rest (2014 §4: gradients pointing towards the closest
+/// point of the surface), measured at mesh vertices: the angle between the field's outward
+/// direction −∇f and the vertex's outward normal, and the distance from the vertex to the field's
+/// `iso` level along the field (Newton steps). Not in the papers.
+struct AgreementOptions {
+  double angle_limit_deg = 60;  ///< angles above this are counted (`FieldAgreement::over_limit`); (0, 180]
+  int newton_steps = 8;         ///< Newton steps towards the level, in [1, 100]
+  double tolerance = 1e-4;      ///< a point is on the level when |f − iso| is below this; > 0
+};
+
+/// Percentiles are nearest rank. A point without a usable gradient has the angle 180° and an
+/// infinite distance, never NaN; a point without a normal is not counted.
+struct FieldAgreement {
+  int points{0};
+  double angle_p50{0}, angle_p95{0}, angle_max{0};  ///< degrees
+  int over_limit{0};                                ///< points whose angle exceeds the limit
+  double distance_p50{0}, distance_p95{0}, distance_max{0};  ///< world units
+};
+
+/// Agreement of `field` (in its local frame; `local_to_world` places it) with the points
+/// `points` (world) and their outward normals `normals` (world, any length; same count).
+/// \throw InputError when the counts differ or the options are out of range.
+FieldAgreement field_agreement(const Field& field, const Rigid3d& local_to_world, const std::vector<Vec3d>& points,
+                               const std::vector<Vec3d>& normals, float iso = 0.5f,
+                               const AgreementOptions& options = {});
+
+/// Area-weighted vertex normals (the sum of the incident triangles' cross products, not
+/// normalised) of `vertices` / `triangles`.
+std::vector<Vec3d> area_weighted_normals(const std::vector<Vec3d>& vertices,
+                                         const std::vector<std::array<int, 3>>& triangles);
+
 /// Distance from `p` to the triangle `a b c` (degenerate triangles: to their edges).
 double point_triangle_distance(const Vec3d& p, const Vec3d& a, const Vec3d& b, const Vec3d& c);
 

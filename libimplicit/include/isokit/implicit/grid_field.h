@@ -34,6 +34,13 @@ class GridField final : public Field {
   /// finite, or does not contain the source's support.
   GridField(const Field& source, const Box3f& box = Box3f{}, const GridFieldOptions& options = {});
 
+  /// A grid from node data computed elsewhere: `nodes` holds 4 floats (value, gx, gy, gz) per
+  /// node, x fastest, `resolution`³ nodes spanning `box` (first and last nodes on its faces).
+  /// The caller guarantees the field vanishes on the box faces (compact support).
+  /// \throw InputError if the resolution is out of range, the box is empty, degenerate or not
+  /// finite, or `nodes` has the wrong size or non-finite entries.
+  GridField(int resolution, const Box3f& box, std::vector<float> nodes);
+
   FieldSample eval(const Vec3f& p) const override { return eval_grid(view(), p); }
   Box3f support() const override { return box_; }
   void eval_batch(const Vec3f* points, std::size_t n, FieldSample* out,

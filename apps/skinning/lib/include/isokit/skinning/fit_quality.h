@@ -5,10 +5,12 @@
 /// (libimplicit fit_quality.h), and the rest vertices of other joints inside the primitive.
 #pragma once
 
+#include <cstdint>
 #include <vector>
 
 #include "isokit/implicit/fit_quality.h"
 #include "isokit/skinning/fitted_rig.h"
+#include "isokit/skinning/skin_field.h"
 
 namespace isokit::skinning {
 
@@ -21,6 +23,9 @@ struct PartQuality {
   double r{0};                       ///< the primitive's t_r width (bone to farthest sample)
   implicit::FitDistances distances;  ///< world units (the rig's)
   PrimitiveCoverage coverage;        ///< rest vertices inside it: own, related, unrelated
+  /// Its own field at its partition's rest vertices, against their normals in the whole mesh
+  /// (area-weighted): angle of −∇f to the normal, distance to the 0.5 level.
+  implicit::FieldAgreement agreement;
 };
 
 struct FitQuality {
@@ -34,6 +39,28 @@ struct FitQuality {
   double worst_from_surface_max() const;
   int unrelated_inside() const;  ///< sum over the primitives
 };
+
+/// What the tracker follows at rest: the composed field (a 2014 tree) against the rest mesh
+/// (issue "Fields that agree with the mesh"; docs/skinning.md, "Checking a fit").
+struct RestAgreement {
+  /// At every rest vertex outside open panels: angle of −∇f to the area-weighted vertex normal
+  /// and distance to the 0.5 level (the 60° limit of TrackerOptions::free_vertex_angle_deg).
+  implicit::FieldAgreement composed;
+  int triangles{0};
+  int inverted_triangles{0};  ///< rest triangles outside open panels whose normal points along +∇f (QUALITY.md)
+  int open_panels{0};         ///< components that are open sheets (`open_panel_vertices`)
+  int panel_vertices{0};      ///< their vertices, left out of the counts above
+  int unrelated_inside{0};    ///< rest vertices inside a primitive of an unrelated joint (FitQuality)
+};
+
+/// Per vertex: 1 on an open panel, a connected component with a border whose triangles' vector
+/// area (which equals its border loops' vector area) is at least 0.3 of its area — a sheet with
+/// no inside (an armour plate, a robot's panel), unlike a tube open at its ends (vector area
+/// near 0) or a body open at the neck (a small share).
+std::vector<std::uint8_t> open_panel_vertices(const Rig& rig, int* panels = nullptr);
+
+/// The composed field `field` (at its rest pose) against the rest mesh of `fitted`.
+RestAgreement rest_agreement(const FittedRig& fitted, const SkinField& field);
 
 /// Measures every primitive of `fitted` (about 0.05 s per part on one core at the default
 /// resolution). \throw InputError for options out of range (fit_quality.h).

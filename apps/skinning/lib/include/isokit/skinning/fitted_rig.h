@@ -33,6 +33,7 @@ enum class FitRule {
   hrbf,         ///< its HRBF, first try (triangles facing the bone with cosine < −0.2 dropped)
   hrbf_strict,  ///< its HRBF, second try (cosine > 0.3 kept)
   hrbf_open,    ///< its HRBF, third try (cosine > 0.3, no closure points)
+  distance,     ///< the distance field of its closed part (SkinSetup::fit.field = distance)
   shared,       ///< no fit: its vertices share the primitive of `merged_into`
   capsule,      ///< no HRBF fit: a capsule that matches its part, or no touching neighbour to share with
   none,         ///< no fit and no fitted neighbour: its vertices have no field

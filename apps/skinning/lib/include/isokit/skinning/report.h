@@ -4,9 +4,11 @@
 /// and the plain-text comparison table `isokit-skin demo` prints.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "isokit/skinning/fit_quality.h"
 #include "isokit/skinning/pipeline.h"
 
 namespace isokit::skinning {
@@ -16,10 +18,12 @@ struct ReportContext {
   double fps{30};
   int threads{0};         ///< 0: unknown
   double fit_seconds{0};  ///< preprocessing: fit of all primitives
+  /// The composed field against the rest mesh (fit_quality.h); written as `rest_agreement`.
+  std::optional<RestAgreement> agreement;
 };
 
 /// The metrics JSON: `{rig, vertices, triangles, joints, animation, fps, threads, fit_seconds,
-/// closed, components, methods: {name: {mean_ms, ratio_to_dqs, vertex_iterations_per_second,
+/// rest_agreement, closed, components, methods: {name: {mean_ms, ratio_to_dqs, vertex_iterations_per_second,
 /// rest_recovery, tracker_calls, capped_calls, capped_share, worst, frames: [...]}}}`. Values not
 /// computed are `null` (docs/skinning-metrics.md, "The metrics JSON").
 std::string metrics_json(const Rig& rig, const std::vector<BakeResult>& results,

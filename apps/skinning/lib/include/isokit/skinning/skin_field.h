@@ -44,6 +44,8 @@ class SkinField {
   track::FieldFunction function(std::shared_ptr<const implicit::Pose> pose, bool contacts = false) const;
 
   const implicit::Program& program() const { return *program_; }
+  const std::shared_ptr<const implicit::Program>& shared_program() const { return program_; }
+  const std::shared_ptr<const implicit::Pose>& rest_pose() const { return rest_; }  ///< the fitted pose
   const implicit::Pose& pose() const { return *pose_; }
   TreeKind kind() const { return kind_; }
   /// Per-joint operators ("joint: operator", describe_joint_operator: "Bone1: contact (preset)",
