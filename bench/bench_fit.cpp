@@ -40,7 +40,8 @@ std::vector<std::string> rig_specs() {
   return out;
 }
 
-void BM_FitRig(benchmark::State& state, const std::string& spec, isokit::implicit::PartFitOptions::FieldKind kind) {
+void BM_FitRig(benchmark::State& state, const std::string& spec,
+               isokit::implicit::PartFitOptions::FieldKind kind) {
   Rig rig;
   try {
     rig = spec == "procedural:humanoid" ? make_humanoid({13000, true}) : open_rig(spec);

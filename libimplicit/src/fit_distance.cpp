@@ -60,7 +60,8 @@ void add_dome(ClosedPart& c, const std::vector<int>& loop, double height, const 
   Vec3d centre{}, newell{};
   double perimeter = 0;
   for (std::size_t i = 0; i < n; ++i) {
-    const Vec3d a = c.v[static_cast<std::size_t>(loop[i])], b = c.v[static_cast<std::size_t>(loop[(i + 1) % n])];
+    const Vec3d a = c.v[static_cast<std::size_t>(loop[i])],
+                b = c.v[static_cast<std::size_t>(loop[(i + 1) % n])];
     const double l = norm(b - a);
     centre += (a + b) * (0.5 * l);
     perimeter += l;
@@ -77,14 +78,16 @@ void add_dome(ClosedPart& c, const std::vector<int>& loop, double height, const 
   }
   const double h = height * radius * std::abs(dot(out, axis));
   const double spacing = perimeter / double(n);
-  const int rings = std::clamp(int(std::ceil(0.5 * kPi * std::max(radius, h) / std::max(spacing, 1e-300))), 1, 12);
+  const int rings =
+      std::clamp(int(std::ceil(0.5 * kPi * std::max(radius, h) / std::max(spacing, 1e-300))), 1, 12);
   std::vector<int> prev(loop.begin(), loop.end());
   for (int k = 1; k < rings; ++k) {
     const double th = 0.5 * kPi * double(k) / double(rings);
     std::vector<int> ring(n);
     for (std::size_t i = 0; i < n; ++i) {
       ring[i] = int(c.v.size());
-      c.v.push_back(centre + (c.v[static_cast<std::size_t>(loop[i])] - centre) * std::cos(th) + out * (h * std::sin(th)));
+      c.v.push_back(centre + (c.v[static_cast<std::size_t>(loop[i])] - centre) * std::cos(th) +
+                    out * (h * std::sin(th)));
     }
     for (std::size_t i = 0; i < n; ++i) {  // the loop runs as its triangles do: the cap the other way
       const std::size_t j = (i + 1) % n;
@@ -101,7 +104,8 @@ void add_dome(ClosedPart& c, const std::vector<int>& loop, double height, const 
 
 ClosedPart close_part(const std::vector<Vec3d>& v, const std::vector<std::array<int, 3>>& t, double height) {
   ClosedPart c{v, t, int(v.size()), 0};
-  for (const std::vector<int>& loop : detail::boundary_loops(t, int(v.size()))) add_dome(c, loop, height, {0, 0, 1});
+  for (const std::vector<int>& loop : detail::boundary_loops(t, int(v.size())))
+    add_dome(c, loop, height, {0, 0, 1});
   return c;
 }
 
@@ -167,10 +171,13 @@ struct Lattice {
 
 /// Unsigned distance to the triangles: exact at the nodes within 1.5 cells of a triangle's box,
 /// then each node takes the nearest of its upwind neighbours' closest points, sweeping the
-/// lattice in its 8 diagonal orders.
-std::vector<double> unsigned_distance(const Lattice& L, const ClosedPart& c) {
+/// lattice in its 8 diagonal orders. Only the nodes within `reach` of the closed part's box are
+/// swept (farther ones keep their distance to that box, a lower bound: `t_r` is 0 there anyway).
+std::vector<double> unsigned_distance(const Lattice& L, const ClosedPart& c, double reach) {
   std::vector<double> dist(L.size(), kInf);
-  std::vector<Vec3d> cp(L.size());
+  std::vector<Vec3f> cp(L.size());
+  std::vector<std::uint8_t> fixed(L.size(), 0);   // exact (band) or beyond reach: not swept
+  std::vector<std::uint8_t> has_cp(L.size(), 0);  // holds a closest point
   const double band = 1.5 * std::max({L.step.x, L.step.y, L.step.z});
   for (const auto& tri : c.t) {
     const Vec3d &a = c.v[tri[0]], &b = c.v[tri[1]], &d = c.v[tri[2]];
@@ -187,28 +194,50 @@ std::vector<double> unsigned_distance(const Lattice& L, const ClosedPart& c) {
           const Vec3d q = closest_on_triangle(p, a, b, d);
           const double dd = norm(p - q);
           const std::size_t id = L.index(i, j, k);
-          if (dd < dist[id]) dist[id] = dd, cp[id] = q;
+          if (dd < dist[id]) dist[id] = dd, cp[id] = {float(q.x), float(q.y), float(q.z)}, has_cp[id] = 1;
         }
   }
+  Box3d core;
+  for (const Vec3d& p : c.v) core.extend(p);
+  for (int k = 0; k < L.n; ++k)
+    for (int j = 0; j < L.n; ++j)
+      for (int i = 0; i < L.n; ++i) {
+        const std::size_t id = L.index(i, j, k);
+        if (dist[id] <= band) {
+          fixed[id] = 1;
+          continue;
+        }
+        const Vec3d p = L.node(i, j, k);
+        Vec3d out;
+        for (int a = 0; a < 3; ++a) out[a] = std::max({core.lo[a] - p[a], 0.0, p[a] - core.hi[a]});
+        const double box_distance = norm(out);
+        if (box_distance > reach) dist[id] = box_distance, fixed[id] = 1, has_cp[id] = 0;
+      }
   for (int sweep = 0; sweep < 8; ++sweep) {
     const int s[3] = {sweep & 1 ? -1 : 1, sweep & 2 ? -1 : 1, sweep & 4 ? -1 : 1};
-    auto range = [&](int ax, int t) { return s[ax] > 0 ? t : L.n - 1 - t; };
     for (int tk = 0; tk < L.n; ++tk)
       for (int tj = 0; tj < L.n; ++tj)
         for (int ti = 0; ti < L.n; ++ti) {
-          const int i = range(0, ti), j = range(1, tj), k = range(2, tk);
+          const int i = s[0] > 0 ? ti : L.n - 1 - ti, j = s[1] > 0 ? tj : L.n - 1 - tj,
+                    k = s[2] > 0 ? tk : L.n - 1 - tk;
           const std::size_t id = L.index(i, j, k);
-          const Vec3d p = L.node(i, j, k);
+          if (fixed[id]) continue;
+          const Vec3d pd = L.node(i, j, k);
+          const Vec3f p{float(pd.x), float(pd.y), float(pd.z)};
+          float best = float(dist[id]);
           for (int o = 1; o < 8; ++o) {
-            const int ni = i - ((o & 1) ? s[0] : 0), nj = j - ((o & 2) ? s[1] : 0), nk = k - ((o & 4) ? s[2] : 0);
+            const int ni = i - ((o & 1) ? s[0] : 0), nj = j - ((o & 2) ? s[1] : 0),
+                      nk = k - ((o & 4) ? s[2] : 0);
             if (ni < 0 || nj < 0 || nk < 0 || ni >= L.n || nj >= L.n || nk >= L.n) continue;
             const std::size_t nb = L.index(ni, nj, nk);
-            if (!std::isfinite(dist[nb])) continue;
-            const double dd = norm(p - cp[nb]);
-            if (dd < dist[id]) dist[id] = dd, cp[id] = cp[nb];
+            if (!has_cp[nb]) continue;
+            const float dd = norm(p - cp[nb]);
+            if (dd < best) best = dd, cp[id] = cp[nb], dist[id] = dd, has_cp[id] = 1;
           }
         }
   }
+  for (double& d : dist)
+    if (!std::isfinite(d)) d = reach;  // reached by no sweep: beyond `reach` in every direction
   return dist;
 }
 
@@ -217,7 +246,12 @@ std::vector<double> unsigned_distance(const Lattice& L, const ClosedPart& c) {
 void vote_inside(const Lattice& L, const ClosedPart& c, int a, std::vector<std::uint8_t>& votes) {
   const int b = (a + 1) % 3, e = (a + 2) % 3;
   const std::size_t n = std::size_t(L.n);
-  std::vector<std::vector<std::pair<double, int>>> column(n * n);
+  struct Crossing {
+    std::size_t column;
+    double x;
+    int sign;
+  };
+  std::vector<Crossing> crossings;
   // Rays run off the lattice lines by a small irrational fraction of a cell, so that they miss
   // the triangles' edges and vertices that sit on the lines.
   const double ob = 1.2345678e-4 * L.step[b], oe = 2.7182818e-4 * L.step[e];
@@ -226,10 +260,14 @@ void vote_inside(const Lattice& L, const ClosedPart& c, int a, std::vector<std::
     const double na = cross(p1 - p0, p2 - p0)[a];
     if (na == 0) continue;
     const int sign = na > 0 ? 1 : -1;
-    const int jb0 = std::max(0, int(std::floor((std::min({p0[b], p1[b], p2[b]}) - ob - L.box.lo[b]) / L.step[b])));
-    const int jb1 = std::min(L.n - 1, int(std::ceil((std::max({p0[b], p1[b], p2[b]}) - ob - L.box.lo[b]) / L.step[b])));
-    const int je0 = std::max(0, int(std::floor((std::min({p0[e], p1[e], p2[e]}) - oe - L.box.lo[e]) / L.step[e])));
-    const int je1 = std::min(L.n - 1, int(std::ceil((std::max({p0[e], p1[e], p2[e]}) - oe - L.box.lo[e]) / L.step[e])));
+    const int jb0 =
+        std::max(0, int(std::floor((std::min({p0[b], p1[b], p2[b]}) - ob - L.box.lo[b]) / L.step[b])));
+    const int jb1 =
+        std::min(L.n - 1, int(std::ceil((std::max({p0[b], p1[b], p2[b]}) - ob - L.box.lo[b]) / L.step[b])));
+    const int je0 =
+        std::max(0, int(std::floor((std::min({p0[e], p1[e], p2[e]}) - oe - L.box.lo[e]) / L.step[e])));
+    const int je1 =
+        std::min(L.n - 1, int(std::ceil((std::max({p0[e], p1[e], p2[e]}) - oe - L.box.lo[e]) / L.step[e])));
     auto edge = [&](const Vec3d& u, const Vec3d& v, double qb, double qe) {
       return (v[b] - u[b]) * (qe - u[e]) - (v[e] - u[e]) * (qb - u[b]);
     };
@@ -241,25 +279,28 @@ void vote_inside(const Lattice& L, const ClosedPart& c, int a, std::vector<std::
         const double sum = w0 + w1 + w2;
         if (!in || sum == 0) continue;
         const double xa = (w0 * p0[a] + w1 * p1[a] + w2 * p2[a]) / sum;
-        column[std::size_t(je) * n + std::size_t(jb)].push_back({xa, sign});
+        crossings.push_back({std::size_t(je) * n + std::size_t(jb), xa, sign});
       }
   }
-  for (std::size_t je = 0; je < n; ++je)
-    for (std::size_t jb = 0; jb < n; ++jb) {
-      auto& col = column[je * n + jb];
-      std::sort(col.begin(), col.end(), [](const auto& x, const auto& y) { return x.first > y.first; });
-      int w = 0;
-      std::size_t next = 0;
-      for (int ia = L.n - 1; ia >= 0; --ia) {
-        const double x = L.box.lo[a] + L.step[a] * ia;
-        while (next < col.size() && col[next].first > x) w += col[next++].second;
-        int idx[3];
-        idx[a] = ia;
-        idx[b] = int(jb);
-        idx[e] = int(je);
-        if (w > 0) ++votes[L.index(idx[0], idx[1], idx[2])];
-      }
+  std::sort(crossings.begin(), crossings.end(), [](const Crossing& x, const Crossing& y) {
+    return x.column != y.column ? x.column < y.column : x.x > y.x;
+  });
+  std::size_t next = 0;
+  for (std::size_t col = 0; col < n * n; ++col) {
+    const std::size_t jb = col % n, je = col / n;
+    int w = 0;
+    for (int ia = L.n - 1; ia >= 0; --ia) {
+      const double x = L.box.lo[a] + L.step[a] * ia;
+      while (next < crossings.size() && crossings[next].column == col && crossings[next].x > x)
+        w += crossings[next++].sign;
+      int idx[3];
+      idx[a] = ia;
+      idx[b] = int(jb);
+      idx[e] = int(je);
+      if (w > 0) ++votes[L.index(idx[0], idx[1], idx[2])];
     }
+    while (next < crossings.size() && crossings[next].column == col) ++next;  // below the lattice
+  }
 }
 
 /// Node data (value, gradient) of `t_r(d)`, `d` the signed distance, ∇d by central differences
@@ -275,7 +316,8 @@ std::vector<float> remapped_nodes(const Lattice& L, const std::vector<double>& d
           int lo[3] = {i, j, k}, hi[3] = {i, j, k};
           lo[a] = std::max(0, idx[a] - 1);
           hi[a] = std::min(L.n - 1, idx[a] + 1);
-          g[a] = (d[L.index(hi[0], hi[1], hi[2])] - d[L.index(lo[0], lo[1], lo[2])]) / (L.step[a] * (hi[a] - lo[a]));
+          g[a] = (d[L.index(hi[0], hi[1], hi[2])] - d[L.index(lo[0], lo[1], lo[2])]) /
+                 (L.step[a] * (hi[a] - lo[a]));
         }
         double dt = 0;
         const double f = remap_tr(d[L.index(i, j, k)], r, &dt);
@@ -298,8 +340,8 @@ void validate(const DistanceFitOptions& o, const std::string& name) {
   require(o.min_resolution >= 8 && o.max_resolution <= GridField::kMaxResolution &&
               o.min_resolution <= o.max_resolution,
           name + ": distance resolutions",
-          "need 8 <= min_resolution <= max_resolution <= " + std::to_string(GridField::kMaxResolution) + " (got " +
-              std::to_string(o.min_resolution) + ", " + std::to_string(o.max_resolution) + ")",
+          "need 8 <= min_resolution <= max_resolution <= " + std::to_string(GridField::kMaxResolution) +
+              " (got " + std::to_string(o.min_resolution) + ", " + std::to_string(o.max_resolution) + ")",
           "use the defaults 32 and 64");
   require(o.overlap_rings >= 0 && o.overlap_rings <= 8, name + ": distance.overlap_rings",
           "must be in [0, 8] (got " + std::to_string(o.overlap_rings) + ")", "use the default 1");
@@ -342,8 +384,9 @@ Lattice choose_lattice(const ClosedPart& c, const DistanceFitOptions& o, double&
 FittedPart fit_part_distance(const MeshPart& part, const PartFitOptions& options) {
   const std::string& name = part.name;
   validate(options.distance, name);
-  require(std::isfinite(part.bone_start.x) && std::isfinite(part.bone_start.y) && std::isfinite(part.bone_start.z) &&
-              std::isfinite(part.bone_end.x) && std::isfinite(part.bone_end.y) && std::isfinite(part.bone_end.z),
+  require(std::isfinite(part.bone_start.x) && std::isfinite(part.bone_start.y) &&
+              std::isfinite(part.bone_start.z) && std::isfinite(part.bone_end.x) &&
+              std::isfinite(part.bone_end.y) && std::isfinite(part.bone_end.z),
           name + ": bone", "has non-finite end points", "fix the skeleton");
   require(!part.vertices.empty() && !part.triangles.empty(), name, "the sub-mesh is empty",
           "assign triangles to this bone or leave it out of the rig");
@@ -367,19 +410,21 @@ FittedPart fit_part_distance(const MeshPart& part, const PartFitOptions& options
   FittedPart out;
   out.local_to_world = bone_frame(part.bone_start, part.bone_end);
   std::vector<Vec3d> local(part.vertices.size());
-  for (std::size_t i = 0; i < local.size(); ++i) local[i] = out.local_to_world.apply_inverse(part.vertices[i]);
+  for (std::size_t i = 0; i < local.size(); ++i)
+    local[i] = out.local_to_world.apply_inverse(part.vertices[i]);
   const ClosedPart closed = close_part(local, part.triangles, options.distance.cap_height);
   out.closure_points = closed.domes;
   double r = 0;
   const Lattice L = choose_lattice(closed, options.distance, r);
-  std::vector<double> d = unsigned_distance(L, closed);
+  std::vector<double> d = unsigned_distance(L, closed, r + 2 * std::max({L.step.x, L.step.y, L.step.z}));
   std::vector<std::uint8_t> votes(L.size(), 0);
   for (int a = 0; a < 3; ++a) vote_inside(L, closed, a, votes);
   std::size_t inside = 0;
   for (std::size_t i = 0; i < d.size(); ++i)
     if (votes[i] >= 2) d[i] = -d[i], ++inside;
-  require(inside > 0, name, "the part's closed surface has no inside on its grid (an open sheet, or triangles "
-                            "oriented inward)",
+  require(inside > 0, name,
+          "the part's closed surface has no inside on its grid (an open sheet, or triangles "
+          "oriented inward)",
           "leave the part to the HRBF fit (fit.field \"hrbf\"), or flip the triangle winding");
   out.r = r;
   const Box3f box{{float(L.box.lo.x), float(L.box.lo.y), float(L.box.lo.z)},

@@ -191,15 +191,16 @@ std::vector<Vec3d> area_weighted_normals(const std::vector<Vec3d>& vertices,
   return n;
 }
 
-FieldAgreement field_agreement(const Field& field, const Rigid3d& local_to_world, const std::vector<Vec3d>& points,
-                               const std::vector<Vec3d>& normals, float iso, const AgreementOptions& o) {
+FieldAgreement field_agreement(const Field& field, const Rigid3d& local_to_world,
+                               const std::vector<Vec3d>& points, const std::vector<Vec3d>& normals, float iso,
+                               const AgreementOptions& o) {
   require(points.size() == normals.size(), "field_agreement",
           std::to_string(points.size()) + " points but " + std::to_string(normals.size()) + " normals",
           "pass one normal per point");
   require(o.angle_limit_deg > 0 && o.angle_limit_deg <= 180, "AgreementOptions::angle_limit_deg",
           "must be in (0, 180]", "use the default 60");
-  require(o.newton_steps >= 1 && o.newton_steps <= 100, "AgreementOptions::newton_steps", "must be in [1, 100]",
-          "use the default 8");
+  require(o.newton_steps >= 1 && o.newton_steps <= 100, "AgreementOptions::newton_steps",
+          "must be in [1, 100]", "use the default 8");
   require(o.tolerance > 0, "AgreementOptions::tolerance", "must be > 0", "use the default 1e-4");
   std::vector<double> angles, distances;
   FieldAgreement out;

@@ -73,8 +73,8 @@ void add_ellipsoid(MeshPart& m, const Vec3d& centre, const Vec3d& axes, int ring
     const double phi = kPi * k / rings;
     for (int s = 0; s < segments; ++s) {
       const double t = 2 * kPi * s / segments;
-      m.vertices.push_back(centre + Vec3d{axes.x * std::sin(phi) * std::cos(t), axes.y * std::sin(phi) * std::sin(t),
-                                          -axes.z * std::cos(phi)});
+      m.vertices.push_back(centre + Vec3d{axes.x * std::sin(phi) * std::cos(t),
+                                          axes.y * std::sin(phi) * std::sin(t), -axes.z * std::cos(phi)});
     }
   }
   m.vertices.push_back(centre + Vec3d{0, 0, axes.z});
@@ -113,7 +113,8 @@ bool on_hand_surface(const Vec3d& p) {
   const Vec3d q{p.x / 0.5, p.y / 0.15, (p.z - 0.4) / 0.4};
   if (dot(q, q) < 1 - 1e-6) return false;
   for (int f = 0; f < 5; ++f)
-    if (p.z > 0.45 && std::hypot(p.x - finger_x(f), p.y) < kFingerRadius * std::cos(kPi / 8) - 1e-9) return false;
+    if (p.z > 0.45 && std::hypot(p.x - finger_x(f), p.y) < kFingerRadius * std::cos(kPi / 8) - 1e-9)
+      return false;
   return true;
 }
 
@@ -159,7 +160,8 @@ TEST_CASE("distance field: a low-poly tube's skin is its iso-surface, normals ag
   }
 }
 
-TEST_CASE("distance field: the HRBF of 50 samples does not follow an 8-sided tube as closely", "[fit][distance]") {
+TEST_CASE("distance field: the HRBF of 50 samples does not follow an 8-sided tube as closely",
+          "[fit][distance]") {
   const MeshPart m = low_poly_tube(8);
   const FieldAgreement d = agreement(fit_part(m, distance_options()), m);
   const FieldAgreement h = agreement(fit_part(m, PartFitOptions{}), m);
@@ -177,7 +179,8 @@ TEST_CASE("distance field: a hand with five thin fingers on one bone", "[fit][di
   const std::vector<Vec3d> normals = normals_of(m);
   std::vector<Vec3d> surface, surface_normals;
   for (std::size_t i = 0; i < m.vertices.size(); ++i)
-    if (on_hand_surface(m.vertices[i])) surface.push_back(m.vertices[i]), surface_normals.push_back(normals[i]);
+    if (on_hand_surface(m.vertices[i]))
+      surface.push_back(m.vertices[i]), surface_normals.push_back(normals[i]);
   REQUIRE(surface.size() > 300);
   const FieldAgreement a = field_agreement(*f.field(), f.local_to_world, surface, surface_normals);
   CHECK(a.over_limit == 0);
@@ -217,7 +220,8 @@ TEST_CASE("distance field: two limbs side by side do not take in each other's ve
   }
 }
 
-TEST_CASE("distance field: an open border is closed by a dome that meets the skin smoothly", "[fit][distance]") {
+TEST_CASE("distance field: an open border is closed by a dome that meets the skin smoothly",
+          "[fit][distance]") {
   MeshPart m;
   m.name = "finger";
   add_tube(m, {0, 0, 0}, 0.2, 1.0, 16, 9, false, true, 0.1);  // open at the joint end (z = 0)
@@ -230,7 +234,8 @@ TEST_CASE("distance field: an open border is closed by a dome that meets the ski
   std::vector<Vec3d> normals = normals_of(m), rim_normals;
   rim.vertices.clear();
   for (std::size_t i = 0; i < m.vertices.size(); ++i)
-    if (std::abs(m.vertices[i].z) < 1e-12) rim.vertices.push_back(m.vertices[i]), rim_normals.push_back(normals[i]);
+    if (std::abs(m.vertices[i].z) < 1e-12)
+      rim.vertices.push_back(m.vertices[i]), rim_normals.push_back(normals[i]);
   REQUIRE(rim.vertices.size() == 16);
   const FieldAgreement a = field_agreement(*f.field(), f.local_to_world, rim.vertices, rim_normals);
   CHECK(a.over_limit == 0);

@@ -6,11 +6,13 @@
 
 #include <cmath>
 
+#include <nlohmann/json.hpp>
 #include "isokit/skinning/animation.h"
 #include "isokit/skinning/fit_quality.h"
 #include "isokit/skinning/fitted_rig.h"
 #include "isokit/skinning/pipeline.h"
 #include "isokit/skinning/procedural.h"
+#include "isokit/skinning/report.h"
 #include "pipeline_fixture.h"
 
 using namespace isokit;
@@ -185,4 +187,146 @@ TEST_CASE("a poor fit counts as failed: a patch that is no limb shares its neigh
                                  << ", shared " << q.worst_from_surface_p95());
   CHECK(q.worst_from_surface_p95() < qk.worst_from_surface_p95());
   CHECK(q.unrelated_inside() <= qk.unrelated_inside());
+}
+
+namespace {
+
+SkinSetup distance_setup() {
+  SkinSetup s;
+  s.fit.field = isokit::implicit::PartFitOptions::FieldKind::distance;
+  return s;
+}
+
+/// The capsule rig with a small closed box sunk into the tube at mid length (a hidden piece, as
+/// an eyeball in its socket or a robot's limb in its torso), weighted to Bone1.
+Rig hidden_box_rig() {
+  Rig r = testing::capsule_rig();
+  const int base = static_cast<int>(r.rest.rows());
+  const float c[8][3] = {{-.1f, 1.4f, -.1f}, {.1f, 1.4f, -.1f}, {.1f, 1.6f, -.1f}, {-.1f, 1.6f, -.1f},
+                         {-.1f, 1.4f, .1f},  {.1f, 1.4f, .1f},  {.1f, 1.6f, .1f},  {-.1f, 1.6f, .1f}};
+  Eigen::MatrixXf rest(base + 8, 3);
+  rest.topRows(base) = r.rest;
+  for (int k = 0; k < 8; ++k) rest.row(base + k) << c[k][0], c[k][1], c[k][2];
+  const int quads[6][4] = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4},
+                           {2, 3, 7, 6}, {1, 2, 6, 5}, {0, 4, 7, 3}};
+  Eigen::MatrixXi tris(r.triangles.rows() + 12, 3);
+  tris.topRows(r.triangles.rows()) = r.triangles;
+  for (int q = 0; q < 6; ++q) {
+    tris.row(r.triangles.rows() + 2 * q) << base + quads[q][0], base + quads[q][1], base + quads[q][2];
+    tris.row(r.triangles.rows() + 2 * q + 1) << base + quads[q][0], base + quads[q][2], base + quads[q][3];
+  }
+  r.rest = rest;
+  r.triangles = tris;
+  for (int v = 0; v < 8; ++v) {
+    r.weights.joints.push_back(1);
+    r.weights.weights.push_back(1.f);
+    r.weights.offsets.push_back(static_cast<int>(r.weights.joints.size()));
+  }
+  return r;
+}
+
+}  // namespace
+
+TEST_CASE("distance fields: the capsule rig's parts and their composition agree with the mesh at rest",
+          "[skinning][fit][distance]") {
+  const Rig rig = testing::capsule_rig();
+  Skinner skinner(rig, distance_setup());
+  const FittedRig& fitted = skinner.fitted();
+  for (const BonePart& b : fitted.bones()) {
+    CHECK(b.rule == FitRule::distance);
+    REQUIRE(b.fit.grid);
+    CHECK(b.fit.grid->resolution() >= 32);
+    CHECK(b.fit.grid->resolution() <= 64);
+  }
+  const FitQuality q = fit_quality(fitted);
+  for (const PartQuality& p : q.parts) {
+    INFO("joint " << p.joint << ": angle p95 " << p.agreement.angle_p95 << " max " << p.agreement.angle_max);
+    CHECK(p.agreement.points > 100);
+    CHECK(p.agreement.over_limit == 0);
+    CHECK(p.agreement.angle_p95 <= 20.0);
+  }
+  const RestAgreement a = rest_agreement(fitted, skinner.field(TreeKind::k2014));
+  CHECK(a.composed.points == int(rig.rest.rows()));
+  CHECK(a.composed.over_limit == 0);
+  CHECK(a.composed.angle_p95 <= 20.0);
+  CHECK(a.composed.distance_p95 <= 0.01 * q.diagonal);
+  CHECK(a.inverted_triangles <= 0.005 * a.triangles);
+  CHECK(a.unrelated_inside == 0);
+  CHECK(a.open_panels == 0);
+  CHECK(a.hidden_vertices == 0);
+  // The paper's HRBF on the same rig, for comparison: it agrees less closely.
+  SkinSetup hrbf;
+  hrbf.fit.field = isokit::implicit::PartFitOptions::FieldKind::hrbf;
+  Skinner paper(rig, hrbf);
+  const RestAgreement h = rest_agreement(paper.fitted(), paper.field(TreeKind::k2014));
+  CHECK(a.composed.distance_p95 < h.composed.distance_p95);
+}
+
+TEST_CASE("rest agreement: open panels and hidden pieces are found and counted apart",
+          "[skinning][fit][distance]") {
+  {
+    // The blade is an open sheet: left out.
+    const Rig rig = blade_rig();
+    Skinner skinner(rig, distance_setup());
+    int panels = 0;
+    const std::vector<std::uint8_t> panel = open_panel_vertices(rig, &panels);
+    CHECK(panels == 1);
+    int marked = 0;
+    for (std::uint8_t p : panel) marked += p;
+    CHECK(marked == 45);
+    const RestAgreement a = rest_agreement(skinner.fitted(), skinner.field(TreeKind::k2014));
+    CHECK(a.open_panels == 1);
+    CHECK(a.panel_vertices == 45);
+    CHECK(a.composed.points == int(rig.rest.rows()) - 45);
+  }
+  {
+    // The box inside the tube: hidden, the rest visible.
+    const Rig rig = hidden_box_rig();
+    const std::vector<std::uint8_t> hidden = hidden_vertices(rig);
+    int n = 0;
+    for (Eigen::Index v = 0; v < rig.rest.rows(); ++v) {
+      n += hidden[static_cast<std::size_t>(v)];
+      if (v >= rig.rest.rows() - 8) CHECK(hidden[static_cast<std::size_t>(v)] == 1);
+    }
+    CHECK(n == 8);
+    Skinner skinner(rig, distance_setup());
+    const RestAgreement a = rest_agreement(skinner.fitted(), skinner.field(TreeKind::k2014));
+    CHECK(a.hidden_vertices == 8);
+    CHECK(a.visible.points == a.composed.points - 8);
+    CHECK(a.visible.over_limit == 0);
+    // The metrics JSON carries the totals.
+    BakeResult dqs;
+    dqs.method = Method::kDqs;
+    const nlohmann::json j =
+        nlohmann::json::parse(metrics_json(rig, {dqs}, ReportContext{"test", 30, 1, 0, a}));
+    REQUIRE(j.contains("rest_agreement"));
+    CHECK(j["rest_agreement"]["hidden_vertices"] == 8);
+    CHECK(j["rest_agreement"]["over_60_deg"] == a.composed.over_limit);
+    CHECK(j["rest_agreement"]["vertices"] == a.composed.points);
+  }
+}
+
+TEST_CASE("distance fields: setup keys and their errors", "[skinning][fit][distance]") {
+  using Kind = isokit::implicit::PartFitOptions::FieldKind;
+  const SkinSetup d = setup_from_json(
+      R"({"fit": {"field": "distance", "distance": {"cells_per_feature": 4, "max_resolution": 80,
+          "overlap_rings": 2, "overlap_sink": 0.3, "cap_height": 0.5, "feature_percentile": 0.2,
+          "width_percentile": 0.8, "min_resolution": 24}}})",
+      "s.json");
+  CHECK(d.fit.field == Kind::distance);
+  CHECK(d.fit.distance.cells_per_feature == 4.0);
+  CHECK(d.fit.distance.max_resolution == 80);
+  CHECK(d.fit.distance.min_resolution == 24);
+  CHECK(d.fit.distance.overlap_rings == 2);
+  CHECK(d.fit.distance.overlap_sink == 0.3);
+  CHECK(d.fit.distance.cap_height == 0.5);
+  CHECK(setup_from_json(R"({"preset": "paper"})", "s.json").fit.field == Kind::hrbf);
+  CHECK_THROWS_WITH(setup_from_json(R"({"fit": {"field": "sdf"}})", "s.json"),
+                    Catch::Contains("s.json.fit.field") && Catch::Contains("\"hrbf\""));
+  CHECK_THROWS_WITH(setup_from_json(R"({"fit": {"distance": {"max_resolution": 1000}}})", "s.json"),
+                    Catch::Contains("s.json.fit.distance.min_resolution / max_resolution"));
+  CHECK_THROWS_WITH(setup_from_json(R"({"fit": {"distance": {"overlap_sink": 2}}})", "s.json"),
+                    Catch::Contains("s.json.fit.distance.overlap_sink") && Catch::Contains("[0, 1]"));
+  CHECK_THROWS_WITH(setup_from_json(R"({"fit": {"distance": {"rings": 2}}})", "s.json"),
+                    Catch::Contains("s.json.fit.distance.rings") && Catch::Contains("unknown key"));
 }

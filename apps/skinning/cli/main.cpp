@@ -88,12 +88,15 @@ void print_info(const Rig& rig, const std::string& spec) {
 void print_agreement(const FitQuality& q, const FittedRig& fitted, Skinner& skinner) {
   const Rig& rig = fitted.rig();
   const double pct = q.diagonal > 0 ? 100.0 / q.diagonal : 0;
-  std::printf("agreement at rest (angle of -grad f to the vertex normal, degrees; distance to the 0.5 level, %%diag):\n");
+  std::printf(
+      "agreement at rest (angle of -grad f to the vertex normal, degrees; distance to the 0.5 level, "
+      "%%diag):\n");
   std::printf("  %-24s %-8s %6s %6s %6s %5s   %8s %8s %8s\n", "joint", "field", "p50", "p95", "max", " >60",
               "dist p50", "p95", "max");
   auto row = [&](const char* name, const char* kind, const isokit::implicit::FieldAgreement& a) {
-    std::printf("  %-24s %-8s %6.1f %6.1f %6.1f %5d   %8.3f %8.3f %8.3f\n", name, kind, a.angle_p50, a.angle_p95,
-                a.angle_max, a.over_limit, a.distance_p50 * pct, a.distance_p95 * pct, a.distance_max * pct);
+    std::printf("  %-24s %-8s %6.1f %6.1f %6.1f %5d   %8.3f %8.3f %8.3f\n", name, kind, a.angle_p50,
+                a.angle_p95, a.angle_max, a.over_limit, a.distance_p50 * pct, a.distance_p95 * pct,
+                a.distance_max * pct);
   };
   for (const PartQuality& p : q.parts) {
     const BonePart& b = fitted.bones()[static_cast<std::size_t>(p.joint)];
@@ -101,10 +104,12 @@ void print_agreement(const FitQuality& q, const FittedRig& fitted, Skinner& skin
   }
   const RestAgreement ra = rest_agreement(fitted, skinner.field(TreeKind::k2014));
   row("composed (2014 tree)", "", ra.composed);
-  std::printf("  inverted triangles at rest: %d of %d (%.2f %%); open panels: %d (%d vertices, left out); "
-              "unrelated vertices inside primitives: %d\n",
-              ra.inverted_triangles, ra.triangles, ra.triangles ? 100.0 * ra.inverted_triangles / ra.triangles : 0.0,
-              ra.open_panels, ra.panel_vertices, ra.unrelated_inside);
+  row("composed, visible", "", ra.visible);
+  std::printf(
+      "  inverted triangles at rest: %d of %d (%.2f %%); open panels: %d (%d vertices, left out); "
+      "hidden vertices (inside another component): %d; unrelated vertices inside primitives: %d\n",
+      ra.inverted_triangles, ra.triangles, ra.triangles ? 100.0 * ra.inverted_triangles / ra.triangles : 0.0,
+      ra.open_panels, ra.panel_vertices, ra.hidden_vertices, ra.unrelated_inside);
 }
 
 FitQuality print_fit(const FittedRig& fitted) {
@@ -284,8 +289,7 @@ int run_info(const Args& a, const Progress& progress) {
   Rig rig = open_and_warn(a, progress);
   print_info(rig, a.rig);
   if (a.info_fit) {
-    Skinner skinner(std::move(rig), a.info_setup.empty() ? SkinSetup{} : load_setup(a.info_setup),
-                          progress);
+    Skinner skinner(std::move(rig), a.info_setup.empty() ? SkinSetup{} : load_setup(a.info_setup), progress);
     const FitQuality q = print_fit(skinner.fitted());
     print_agreement(q, skinner.fitted(), skinner);
     print_operators(skinner.fitted(), skinner.setup());

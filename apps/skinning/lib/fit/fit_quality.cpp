@@ -5,6 +5,7 @@
 #include <array>
 
 #include "isokit/core/mesh_quality.h"
+#include "isokit/core/parallel.h"
 #include "isokit/implicit/program_field.h"
 #include "isokit/skinning/mesh_closure.h"
 
@@ -69,7 +70,8 @@ namespace {
 
 std::vector<Vec3d> rest_points(const Rig& r) {
   std::vector<Vec3d> p(static_cast<std::size_t>(r.rest.rows()));
-  for (Eigen::Index v = 0; v < r.rest.rows(); ++v) p[static_cast<std::size_t>(v)] = {r.rest(v, 0), r.rest(v, 1), r.rest(v, 2)};
+  for (Eigen::Index v = 0; v < r.rest.rows(); ++v)
+    p[static_cast<std::size_t>(v)] = {r.rest(v, 0), r.rest(v, 1), r.rest(v, 2)};
   return p;
 }
 
@@ -89,7 +91,8 @@ std::vector<std::uint8_t> open_panel_vertices(const Rig& rig, int* panels) {
   std::vector<double> area(closure.components.size(), 0);
   for (Eigen::Index f = 0; f < rig.triangles.rows(); ++f) {
     const std::size_t c = static_cast<std::size_t>(closure.component[static_cast<std::size_t>(f)]);
-    const Vec3d n = cross(p[rig.triangles(f, 1)] - p[rig.triangles(f, 0)], p[rig.triangles(f, 2)] - p[rig.triangles(f, 0)]);
+    const Vec3d n = cross(p[rig.triangles(f, 1)] - p[rig.triangles(f, 0)],
+                          p[rig.triangles(f, 2)] - p[rig.triangles(f, 0)]);
     vector_area[c] += n * 0.5;
     area[c] += 0.5 * norm(n);
   }
@@ -107,6 +110,43 @@ std::vector<std::uint8_t> open_panel_vertices(const Rig& rig, int* panels) {
   return out;
 }
 
+std::vector<std::uint8_t> hidden_vertices(const Rig& rig) {
+  const MeshClosure closure = mesh_closure(rig.triangles, rig.rest.rows());
+  const std::vector<Vec3d> p = rest_points(rig);
+  const std::size_t nc = closure.components.size();
+  std::vector<std::uint8_t> out(p.size(), 0);
+  if (nc < 2) return out;
+  std::vector<int> component(p.size(), -1);
+  std::vector<Box3d> box(nc);
+  for (Eigen::Index f = 0; f < rig.triangles.rows(); ++f) {
+    const int c = closure.component[static_cast<std::size_t>(f)];
+    for (int k = 0; k < 3; ++k) {
+      component[static_cast<std::size_t>(rig.triangles(f, k))] = c;
+      box[static_cast<std::size_t>(c)].extend(p[static_cast<std::size_t>(rig.triangles(f, k))]);
+    }
+  }
+  parallel_for(p.size(), 64, [&](std::size_t begin, std::size_t end) {
+    std::vector<double> winding(nc);
+    for (std::size_t v = begin; v < end; ++v) {
+      std::fill(winding.begin(), winding.end(), 0.0);
+      for (Eigen::Index f = 0; f < rig.triangles.rows(); ++f) {
+        const int c = closure.component[static_cast<std::size_t>(f)];
+        if (c == component[v] || !box[static_cast<std::size_t>(c)].contains(p[v])) continue;
+        // Solid angle of the triangle seen from the vertex (Van Oosterom and Strackee 1983).
+        const Vec3d a = p[rig.triangles(f, 0)] - p[v], b = p[rig.triangles(f, 1)] - p[v],
+                    d = p[rig.triangles(f, 2)] - p[v];
+        const double la = norm(a), lb = norm(b), ld = norm(d);
+        const double num = dot(a, cross(b, d));
+        const double den = la * lb * ld + dot(a, b) * ld + dot(b, d) * la + dot(d, a) * lb;
+        winding[static_cast<std::size_t>(c)] += 2 * std::atan2(num, den) / (4 * kPi);
+      }
+      for (double w : winding)
+        if (w > 0.5) out[v] = 1;
+    }
+  });
+  return out;
+}
+
 RestAgreement rest_agreement(const FittedRig& fitted, const SkinField& field) {
   const Rig& r = fitted.rig();
   RestAgreement out;
@@ -114,7 +154,8 @@ RestAgreement rest_agreement(const FittedRig& fitted, const SkinField& field) {
   const std::vector<Vec3d> p = rest_points(r);
   const std::vector<std::array<int, 3>> tris = triangle_list(r);
   const std::vector<Vec3d> normals = implicit::area_weighted_normals(p, tris);
-  std::vector<Vec3d> kept, kept_normals;
+  const std::vector<std::uint8_t> hidden = hidden_vertices(r);
+  std::vector<Vec3d> kept, kept_normals, visible, visible_normals;
   for (std::size_t v = 0; v < p.size(); ++v) {
     if (panel[v]) {
       ++out.panel_vertices;
@@ -122,9 +163,16 @@ RestAgreement rest_agreement(const FittedRig& fitted, const SkinField& field) {
     }
     kept.push_back(p[v]);
     kept_normals.push_back(normals[v]);
+    if (hidden[v]) {
+      ++out.hidden_vertices;
+      continue;
+    }
+    visible.push_back(p[v]);
+    visible_normals.push_back(normals[v]);
   }
   const implicit::ProgramField composed(field.shared_program(), field.rest_pose());
   out.composed = implicit::field_agreement(composed, Rigid3d{}, kept, kept_normals);
+  out.visible = implicit::field_agreement(composed, Rigid3d{}, visible, visible_normals);
   for (const auto& t : tris) {
     if (panel[static_cast<std::size_t>(t[0])]) continue;
     ++out.triangles;
@@ -174,7 +222,8 @@ FitQuality fit_quality(const FittedRig& fitted, const implicit::FitDistanceOptio
         options);
     std::vector<Vec3d> own, own_normals;
     for (std::size_t v = 0; v < all_points.size(); ++v)
-      if (fitted.partition()[v] == b.joint) own.push_back(all_points[v]), own_normals.push_back(all_normals[v]);
+      if (fitted.partition()[v] == b.joint)
+        own.push_back(all_points[v]), own_normals.push_back(all_normals[v]);
     q.agreement = implicit::field_agreement(*b.fit.field(), b.fit.local_to_world, own, own_normals);
     out.parts.push_back(q);
   }

@@ -120,6 +120,9 @@ std::string metrics_json(const Rig& rig, const std::vector<BakeResult>& results,
     ra["distance_p50"] = num(a.composed.distance_p50);
     ra["distance_p95"] = num(a.composed.distance_p95);
     ra["distance_max"] = num(a.composed.distance_max);
+    ra["hidden_vertices"] = a.hidden_vertices;
+    ra["visible_over_60_deg"] = a.visible.over_limit;
+    ra["visible_angle_p95_deg"] = num(a.visible.angle_p95);
     ra["triangles"] = a.triangles;
     ra["inverted_triangles"] = a.inverted_triangles;
     ra["open_panels"] = a.open_panels;

@@ -230,8 +230,8 @@ void read_distance_fit(const json& d, const std::string& w, implicit::DistanceFi
           "use 0.9 (the default)");
   require(o.min_resolution >= 8 && o.max_resolution <= 256 && o.min_resolution <= o.max_resolution,
           w + ".min_resolution / max_resolution",
-          "need 8 <= min_resolution <= max_resolution <= 256 (got " + std::to_string(o.min_resolution) + ", " +
-              std::to_string(o.max_resolution) + ")",
+          "need 8 <= min_resolution <= max_resolution <= 256 (got " + std::to_string(o.min_resolution) +
+              ", " + std::to_string(o.max_resolution) + ")",
           "use 32 and 64 (the defaults)");
   require(std::isfinite(o.cap_height) && o.cap_height >= 0 && o.cap_height <= 2, w + ".cap_height",
           "must be in [0, 2] (got " + format_number(o.cap_height) + ")", "use 1 (the default)");
@@ -246,10 +246,12 @@ void read_fit(const json& f, const std::string& w, implicit::PartFitOptions& fit
              w);
   if (f.contains("field")) {
     const json& k = f.at("field");
-    require(k.is_string() && (k == "hrbf" || k == "distance"), w + ".field",
-            "must be \"hrbf\" or \"distance\" (got " + k.dump() + ")",
-            "use \"distance\" (the default: the part's own surface) or \"hrbf\" (2013 §4.1, the paper preset)");
-    fit.field = k == "hrbf" ? implicit::PartFitOptions::FieldKind::hrbf : implicit::PartFitOptions::FieldKind::distance;
+    require(
+        k.is_string() && (k == "hrbf" || k == "distance"), w + ".field",
+        "must be \"hrbf\" or \"distance\" (got " + k.dump() + ")",
+        "use \"distance\" (the default: the part's own surface) or \"hrbf\" (2013 §4.1, the paper preset)");
+    fit.field = k == "hrbf" ? implicit::PartFitOptions::FieldKind::hrbf
+                            : implicit::PartFitOptions::FieldKind::distance;
   }
   if (f.contains("distance")) read_distance_fit(f.at("distance"), w + ".distance", fit.distance);
   read(f, "capsule_match", capsule_match, w);

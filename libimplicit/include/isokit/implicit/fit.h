@@ -79,8 +79,8 @@ struct DistanceFitOptions {
   int overlap_rings = 1;
   /// How far the k-th overlap ring sinks below the skin: k × this × the vertex's mean edge
   /// length, along its inward normal, in [0, 1] (so that across the border the neighbour's own
-  /// field holds its vertices, and the two surfaces do not meet in a crease). Default 0.1.
-  double overlap_sink = 0.1;
+  /// field holds its vertices, and the two surfaces do not meet in a crease). Default 0.2.
+  double overlap_sink = 0.2;
 };
 
 struct PartFitOptions {
@@ -160,9 +160,9 @@ Rigid3d bone_frame(const Vec3d& a, const Vec3d& b);
 /// surface with no inside.
 FittedPart fit_part_distance(const MeshPart& part, const PartFitOptions& options = {});
 
-/// Fits one part (`options.field`: HRBF or distance field). \throw InputError naming `part.name`: zero-length bone, empty part, indices
-/// out of range, non-finite vertices, fewer than 4 usable samples, inward-oriented triangles (the
-/// samples' normals point towards the bone on average), or a failed HRBF fit.
+/// Fits one part (`options.field`: HRBF or distance field). \throw InputError naming `part.name`: zero-length
+/// bone, empty part, indices out of range, non-finite vertices, fewer than 4 usable samples, inward-oriented
+/// triangles (the samples' normals point towards the bone on average), or a failed HRBF fit.
 FittedPart fit_part(const MeshPart& part, const PartFitOptions& options = {});
 
 /// Fallback primitive for a part whose HRBF cannot be bounded (docs/skinning.md, "No vertex

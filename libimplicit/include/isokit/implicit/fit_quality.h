@@ -66,17 +66,17 @@ struct AgreementOptions {
 /// infinite distance, never NaN; a point without a normal is not counted.
 struct FieldAgreement {
   int points{0};
-  double angle_p50{0}, angle_p95{0}, angle_max{0};  ///< degrees
-  int over_limit{0};                                ///< points whose angle exceeds the limit
+  double angle_p50{0}, angle_p95{0}, angle_max{0};           ///< degrees
+  int over_limit{0};                                         ///< points whose angle exceeds the limit
   double distance_p50{0}, distance_p95{0}, distance_max{0};  ///< world units
 };
 
 /// Agreement of `field` (in its local frame; `local_to_world` places it) with the points
 /// `points` (world) and their outward normals `normals` (world, any length; same count).
 /// \throw InputError when the counts differ or the options are out of range.
-FieldAgreement field_agreement(const Field& field, const Rigid3d& local_to_world, const std::vector<Vec3d>& points,
-                               const std::vector<Vec3d>& normals, float iso = 0.5f,
-                               const AgreementOptions& options = {});
+FieldAgreement field_agreement(const Field& field, const Rigid3d& local_to_world,
+                               const std::vector<Vec3d>& points, const std::vector<Vec3d>& normals,
+                               float iso = 0.5f, const AgreementOptions& options = {});
 
 /// Area-weighted vertex normals (the sum of the incident triangles' cross products, not
 /// normalised) of `vertices` / `triangles`.

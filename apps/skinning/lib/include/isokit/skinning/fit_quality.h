@@ -46,11 +46,17 @@ struct RestAgreement {
   /// At every rest vertex outside open panels: angle of −∇f to the area-weighted vertex normal
   /// and distance to the 0.5 level (the 60° limit of TrackerOptions::free_vertex_angle_deg).
   implicit::FieldAgreement composed;
+  /// The same over the visible vertices: those also not inside another connected component of
+  /// the mesh (an eyeball in its socket, a robot's limb sunk into its torso: no field whose
+  /// surface is the skin passes through them).
+  implicit::FieldAgreement visible;
+  int hidden_vertices{0};  ///< vertices inside another component (`hidden_vertices`), outside open panels
   int triangles{0};
-  int inverted_triangles{0};  ///< rest triangles outside open panels whose normal points along +∇f (QUALITY.md)
-  int open_panels{0};         ///< components that are open sheets (`open_panel_vertices`)
-  int panel_vertices{0};      ///< their vertices, left out of the counts above
-  int unrelated_inside{0};    ///< rest vertices inside a primitive of an unrelated joint (FitQuality)
+  int inverted_triangles{
+      0};                 ///< rest triangles outside open panels whose normal points along +∇f (QUALITY.md)
+  int open_panels{0};     ///< components that are open sheets (`open_panel_vertices`)
+  int panel_vertices{0};  ///< their vertices, left out of the counts above
+  int unrelated_inside{0};  ///< rest vertices inside a primitive of an unrelated joint (FitQuality)
 };
 
 /// Per vertex: 1 on an open panel, a connected component with a border whose triangles' vector
@@ -58,6 +64,11 @@ struct RestAgreement {
 /// no inside (an armour plate, a robot's panel), unlike a tube open at its ends (vector area
 /// near 0) or a body open at the neck (a small share).
 std::vector<std::uint8_t> open_panel_vertices(const Rig& rig, int* panels = nullptr);
+
+/// Per vertex: 1 when it lies inside another connected component of the mesh (generalized
+/// winding number of that component's triangles above 0.5, Jacobson et al. 2013), so it is not
+/// on the visible skin.
+std::vector<std::uint8_t> hidden_vertices(const Rig& rig);
 
 /// The composed field `field` (at its rest pose) against the rest mesh of `fitted`.
 RestAgreement rest_agreement(const FittedRig& fitted, const SkinField& field);

@@ -10,7 +10,8 @@
 ///   "default_operator": "auto",
 ///   "joints": { "LeftForeArm": { "operator": "bulge", "relaxation": 0.5, "spec": "my_bulge.json" } },
 ///   "fit": { "samples": 50, "cull_h": 0.05, "grid_resolution": 32, "seed": 1,
-///            "opening_offset": 0.1 },
+///            "opening_offset": 0.1, "field": "hrbf",
+///            "distance": { "cells_per_feature": 3, "max_resolution": 64, "overlap_rings": 1 } },
 ///   "operators": { "resolution": 128, "slices": 128, "contact_spec": "my_contact.json",
 ///                  "bulge_spec": "my_bulge.json" },
 ///   "tracker": { "max_iterations": 100, "tolerance": 1e-5, "sigma": 1.0, "contact_angle_deg": 55,
@@ -19,6 +20,9 @@
 ///   "projector": { "sigma": 0.35, "max_iterations": 50, "contact_angle_deg": 55 },
 ///   "substeps": { "paper_rule": true, "fold_rule": true, "min_step_rad": 0.05, "max_step_rad": 0 } }
 /// ```
+/// `fit.field`: "hrbf" (2013 §4.1, the default) or "distance" (each part's field built from its
+/// own closed surface, implicit::DistanceFitOptions under `fit.distance`;
+/// docs/decisions/part-fields-from-the-mesh.md).
 /// `tree`: "auto" (the method's paper), "2013" or "2014". `default_operator`: "auto" (2014:
 /// contact, 2013: blend), "union", "blend", "bulge" or "contact". `tracker.relaxation`: "jacobi"
 /// (2014, the default), "global" (docs/decisions/global-tangent-solve.md) or "cg" (track::Relaxation).
@@ -101,7 +105,7 @@ struct SkinSetup {
   /// Setup key `default_operator`.
   JointOperator default_operator{JointOperator::kAuto};
   std::map<std::string, JointSettings> joints;  ///< by joint name; absent joints: the defaults
-  implicit::PartFitOptions fit{};               ///< HRBF fit per part (2013 §4.1). Setup key `fit`
+  implicit::PartFitOptions fit{};               ///< fit per part (2013 §4.1: HRBF). Setup key `fit`
   /// A part whose HRBF fails keeps a fitted capsule (and its own joint's motion) instead of
   /// sharing a touching neighbour's primitive when the capsule's vertex → surface p95 is at most
   /// this many times its radius; 0 = off: such a part shares first, and a capsule is only the last
