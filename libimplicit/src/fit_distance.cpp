@@ -303,6 +303,26 @@ void vote_inside(const Lattice& L, const ClosedPart& c, int a, std::vector<std::
   }
 }
 
+/// `passes` passes of the binomial filter [1 2 1] / 4 along each axis (the faces keep their
+/// own value on the missing side): rounds the signed distance's creases over about a cell per
+/// pass, so that the gradient turns gradually around a coarse mesh's corners.
+void smooth(const Lattice& L, int passes, std::vector<double>& d) {
+  std::vector<double> tmp(d.size());
+  for (int pass = 0; pass < passes; ++pass)
+    for (int a = 0; a < 3; ++a) {
+      for (int k = 0; k < L.n; ++k)
+        for (int j = 0; j < L.n; ++j)
+          for (int i = 0; i < L.n; ++i) {
+            int lo[3] = {i, j, k}, hi[3] = {i, j, k};
+            lo[a] = std::max(0, lo[a] - 1);
+            hi[a] = std::min(L.n - 1, hi[a] + 1);
+            const std::size_t id = L.index(i, j, k);
+            tmp[id] = 0.25 * (d[L.index(lo[0], lo[1], lo[2])] + 2 * d[id] + d[L.index(hi[0], hi[1], hi[2])]);
+          }
+      d.swap(tmp);
+    }
+}
+
 /// Node data (value, gradient) of `t_r(d)`, `d` the signed distance, ∇d by central differences
 /// (one-sided on the faces).
 std::vector<float> remapped_nodes(const Lattice& L, const std::vector<double>& d, double r) {
@@ -345,6 +365,8 @@ void validate(const DistanceFitOptions& o, const std::string& name) {
           "use the defaults 32 and 64");
   require(o.overlap_rings >= 0 && o.overlap_rings <= 8, name + ": distance.overlap_rings",
           "must be in [0, 8] (got " + std::to_string(o.overlap_rings) + ")", "use the default 1");
+  require(o.smoothing_passes >= 0 && o.smoothing_passes <= 8, name + ": distance.smoothing_passes",
+          "must be in [0, 8] (got " + std::to_string(o.smoothing_passes) + ")", "use the default 0");
   require(o.overlap_sink >= 0 && o.overlap_sink <= 1, name + ": distance.overlap_sink",
           "must be in [0, 1] (got " + format_number(o.overlap_sink) + ")", "use the default 0.2");
   require(o.cap_height >= 0 && o.cap_height <= 2, name + ": distance.cap_height",
@@ -352,7 +374,9 @@ void validate(const DistanceFitOptions& o, const std::string& name) {
 }
 
 /// The lattice and `r`: spacing from the thinnest feature, `r` from the width; the box is the
-/// closed part's box grown by `r` and a cell, so that the field is 0 on its faces.
+/// closed part's box grown by `r` and a cell on each axis, so that the field is 0 on its faces.
+/// The same number of nodes on every axis: a long, thin part (a sword, a finger) gets finer
+/// cells across than along.
 Lattice choose_lattice(const ClosedPart& c, const DistanceFitOptions& o, double& r) {
   Box3d core;
   for (const Vec3d& p : c.v) core.extend(p);
@@ -365,17 +389,15 @@ Lattice choose_lattice(const ClosedPart& c, const DistanceFitOptions& o, double&
   Lattice L;
   L.n = std::clamp(int(std::ceil((span + 2 * r) / std::max(wanted, 1e-12 * diag))) + 3, o.min_resolution,
                    o.max_resolution);
-  // Two cells at least: below that t_r is a step.
-  const double cell = (span + 2 * r) / double(L.n - 3);
-  r = std::max(r, 2 * cell);
-  const double grow = r + cell;
-  const double cube = span + 2 * grow;  // a cubic box: cells of equal size on every axis
+  // Two cells at least (across the thinnest axis): below that t_r is a step.
+  const double thinnest = std::min({core.size().x, core.size().y, core.size().z});
+  r = std::max(r, 2 * (thinnest + 2 * r) / double(L.n - 3));
   for (int a = 0; a < 3; ++a) {
-    const double mid = 0.5 * (core.lo[a] + core.hi[a]);
-    L.box.lo[a] = mid - 0.5 * cube;
-    L.box.hi[a] = mid + 0.5 * cube;
+    const double grow = r + (core.size()[a] + 2 * r) / double(L.n - 3);
+    L.box.lo[a] = core.lo[a] - grow;
+    L.box.hi[a] = core.hi[a] + grow;
+    L.step[a] = (L.box.hi[a] - L.box.lo[a]) / double(L.n - 1);
   }
-  for (int a = 0; a < 3; ++a) L.step[a] = (L.box.hi[a] - L.box.lo[a]) / double(L.n - 1);
   return L;
 }
 
@@ -426,6 +448,7 @@ FittedPart fit_part_distance(const MeshPart& part, const PartFitOptions& options
           "the part's closed surface has no inside on its grid (an open sheet, or triangles "
           "oriented inward)",
           "leave the part to the HRBF fit (fit.field \"hrbf\"), or flip the triangle winding");
+  smooth(L, options.distance.smoothing_passes, d);
   out.r = r;
   const Box3f box{{float(L.box.lo.x), float(L.box.lo.y), float(L.box.lo.z)},
                   {float(L.box.hi.x), float(L.box.hi.y), float(L.box.hi.z)}};

@@ -311,7 +311,7 @@ TEST_CASE("distance fields: setup keys and their errors", "[skinning][fit][dista
   const SkinSetup d = setup_from_json(
       R"({"fit": {"field": "distance", "distance": {"cells_per_feature": 4, "max_resolution": 80,
           "overlap_rings": 2, "overlap_sink": 0.3, "cap_height": 0.5, "feature_percentile": 0.2,
-          "width_percentile": 0.8, "min_resolution": 24}}})",
+          "width_percentile": 0.8, "min_resolution": 24, "smoothing_passes": 2}}})",
       "s.json");
   CHECK(d.fit.field == Kind::distance);
   CHECK(d.fit.distance.cells_per_feature == 4.0);
@@ -320,6 +320,9 @@ TEST_CASE("distance fields: setup keys and their errors", "[skinning][fit][dista
   CHECK(d.fit.distance.overlap_rings == 2);
   CHECK(d.fit.distance.overlap_sink == 0.3);
   CHECK(d.fit.distance.cap_height == 0.5);
+  CHECK(d.fit.distance.smoothing_passes == 2);
+  CHECK_THROWS_WITH(setup_from_json(R"({"fit": {"distance": {"smoothing_passes": -1}}})", "s.json"),
+                    Catch::Contains("s.json.fit.distance.smoothing_passes") && Catch::Contains("[0, 8]"));
   CHECK(setup_from_json(R"({"preset": "paper"})", "s.json").fit.field == Kind::hrbf);
   CHECK_THROWS_WITH(setup_from_json(R"({"fit": {"field": "sdf"}})", "s.json"),
                     Catch::Contains("s.json.fit.field") && Catch::Contains("\"hrbf\""));

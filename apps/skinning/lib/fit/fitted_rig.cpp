@@ -470,7 +470,9 @@ bool fit_joint(const JointParts& parts, const SkinSetup& setup, int j, bool refi
   if (o.field == implicit::PartFitOptions::FieldKind::distance) {
     // The part's own closed surface (all its triangles: a patch of a neighbour's skin is skin the
     // field must follow too, and rings of the neighbours' across its border); where it cannot
-    // give a field, the HRBF tries below.
+    // give a field, the HRBF tries below. (Keeping a part's HRBF where it agrees with the part's
+    // vertices better was measured and not kept: the HRBF reaches into the neighbours and the
+    // composed field agrees less, docs/decisions/part-fields-from-the-mesh.md.)
     try {
       implicit::MeshPart overlapping = part;
       add_overlap_rings(parts, j, o.distance.overlap_rings, o.distance.overlap_sink, overlapping);

@@ -205,7 +205,7 @@ void read_joints(const json& js, const std::string& source, const std::string& b
 void read_distance_fit(const json& d, const std::string& w, implicit::DistanceFitOptions& o) {
   check_keys(d,
              {"cells_per_feature", "feature_percentile", "min_resolution", "max_resolution", "cap_height",
-              "width_percentile", "overlap_rings", "overlap_sink"},
+              "width_percentile", "overlap_rings", "overlap_sink", "smoothing_passes"},
              w);
   read(d, "cells_per_feature", o.cells_per_feature, w);
   read(d, "feature_percentile", o.feature_percentile, w);
@@ -215,6 +215,9 @@ void read_distance_fit(const json& d, const std::string& w, implicit::DistanceFi
   read(d, "width_percentile", o.width_percentile, w);
   read(d, "overlap_rings", o.overlap_rings, w);
   read(d, "overlap_sink", o.overlap_sink, w);
+  read(d, "smoothing_passes", o.smoothing_passes, w);
+  require(o.smoothing_passes >= 0 && o.smoothing_passes <= 8, w + ".smoothing_passes",
+          "must be in [0, 8] (got " + std::to_string(o.smoothing_passes) + ")", "use 0 (the default)");
   require(std::isfinite(o.overlap_sink) && o.overlap_sink >= 0 && o.overlap_sink <= 1, w + ".overlap_sink",
           "must be in [0, 1] (got " + format_number(o.overlap_sink) + ")", "use 0.2 (the default)");
   require(o.overlap_rings >= 0 && o.overlap_rings <= 8, w + ".overlap_rings",

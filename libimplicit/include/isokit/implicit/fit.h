@@ -81,6 +81,10 @@ struct DistanceFitOptions {
   /// length, along its inward normal, in [0, 1] (so that across the border the neighbour's own
   /// field holds its vertices, and the two surfaces do not meet in a crease). Default 0.2.
   double overlap_sink = 0.2;
+  /// Passes of a [1 2 1] / 4 filter over the sampled signed distance along each axis, in [0, 8]:
+  /// each rounds the field's creases (a coarse mesh's corners, the medial surface) over about a
+  /// cell, at the cost of moving the 0.5 level off sharp corners. Default 0.
+  int smoothing_passes = 0;
 };
 
 struct PartFitOptions {
