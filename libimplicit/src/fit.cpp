@@ -345,11 +345,7 @@ double closed_fit_score(const FittedPart& fit, const MeshPart& part) {
 
 FittedPart fit_part(const MeshPart& part, const PartFitOptions& o) {
   validate_options(o, part.name);
-  if (o.field == PartFitOptions::FieldKind::distance) {
-    FittedPart out = fit_part_distance(part, o);
-    out.error = closed_fit_score(out, part);
-    return out;
-  }
+  if (o.field == PartFitOptions::FieldKind::distance) return fit_part_distance(part, o);
   if (o.closure != PartFitOptions::Closure::best) {
     FittedPart out = fit_part_closed(part, o);
     out.error = closed_fit_score(out, part);

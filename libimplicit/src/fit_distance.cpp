@@ -213,8 +213,13 @@ std::vector<double> unsigned_distance(const Lattice& L, const ClosedPart& c, dou
         const double box_distance = norm(out);
         if (box_distance > reach) dist[id] = box_distance, fixed[id] = 1, has_cp[id] = 0;
       }
+  const long nn = L.n, sy = nn, sz = nn * nn;
   for (int sweep = 0; sweep < 8; ++sweep) {
     const int s[3] = {sweep & 1 ? -1 : 1, sweep & 2 ? -1 : 1, sweep & 4 ? -1 : 1};
+    // The 7 upwind neighbours as index offsets; `axes` says which axes each one steps along.
+    long offset[8];
+    for (int o = 1; o < 8; ++o)
+      offset[o] = -((o & 1) ? s[0] : 0) - ((o & 2) ? s[1] * sy : 0) - ((o & 4) ? s[2] * sz : 0);
     for (int tk = 0; tk < L.n; ++tk)
       for (int tj = 0; tj < L.n; ++tj)
         for (int ti = 0; ti < L.n; ++ti) {
@@ -222,17 +227,25 @@ std::vector<double> unsigned_distance(const Lattice& L, const ClosedPart& c, dou
                     k = s[2] > 0 ? tk : L.n - 1 - tk;
           const std::size_t id = L.index(i, j, k);
           if (fixed[id]) continue;
+          // An upwind step leaves the lattice only on the first node of a sweep's axis.
+          const int ok = (ti > 0 ? 1 : 0) | (tj > 0 ? 2 : 0) | (tk > 0 ? 4 : 0);
           const Vec3d pd = L.node(i, j, k);
           const Vec3f p{float(pd.x), float(pd.y), float(pd.z)};
-          float best = float(dist[id]);
+          float best2 =
+              std::isfinite(dist[id]) ? float(dist[id] * dist[id]) : std::numeric_limits<float>::infinity();
+          long from = -1;
           for (int o = 1; o < 8; ++o) {
-            const int ni = i - ((o & 1) ? s[0] : 0), nj = j - ((o & 2) ? s[1] : 0),
-                      nk = k - ((o & 4) ? s[2] : 0);
-            if (ni < 0 || nj < 0 || nk < 0 || ni >= L.n || nj >= L.n || nk >= L.n) continue;
-            const std::size_t nb = L.index(ni, nj, nk);
+            if ((o & ok) != o) continue;
+            const std::size_t nb = std::size_t(long(id) + offset[o]);
             if (!has_cp[nb]) continue;
-            const float dd = norm(p - cp[nb]);
-            if (dd < best) best = dd, cp[id] = cp[nb], dist[id] = dd, has_cp[id] = 1;
+            const Vec3f e = p - cp[nb];
+            const float d2 = dot(e, e);
+            if (d2 < best2) best2 = d2, from = long(nb);
+          }
+          if (from >= 0) {
+            cp[id] = cp[std::size_t(from)];
+            dist[id] = std::sqrt(double(best2));
+            has_cp[id] = 1;
           }
         }
   }

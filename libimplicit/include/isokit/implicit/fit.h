@@ -145,7 +145,8 @@ struct FittedPart {
   int closure_points{0};
   /// How far the primitive is from its part (world units): vertex → surface p95 plus surface →
   /// part p95 (fit_quality.h, 24³ lattice), the part closed by a flat fan over each border loop.
-  /// What `Closure::best` compares.
+  /// What `Closure::best` compares. 0 for a distance field (its 0.5 level is the part's own
+  /// surface; `field_agreement` measures it).
   double error{0};
   /// The grid if sampled, else the HRBF field.
   FieldPtr field() const;
