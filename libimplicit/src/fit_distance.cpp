@@ -169,16 +169,16 @@ struct Lattice {
   std::size_t size() const { return std::size_t(n) * std::size_t(n) * std::size_t(n); }
 };
 
-/// Unsigned distance to the triangles: exact at the nodes within 1.5 cells of a triangle's box,
-/// then each node takes the nearest of its upwind neighbours' closest points, sweeping the
-/// lattice in its 8 diagonal orders. Only the nodes within `reach` of the closed part's box are
-/// swept (farther ones keep their distance to that box, a lower bound: `t_r` is 0 there anyway).
-std::vector<double> unsigned_distance(const Lattice& L, const ClosedPart& c, double reach) {
-  std::vector<double> dist(L.size(), kInf);
-  std::vector<Vec3f> cp(L.size());
-  std::vector<std::uint8_t> fixed(L.size(), 0);   // exact (band) or beyond reach: not swept
-  std::vector<std::uint8_t> has_cp(L.size(), 0);  // holds a closest point
-  const double band = 1.5 * std::max({L.step.x, L.step.y, L.step.z});
+/// The closest-point propagation's state per node.
+struct ClosestPoints {
+  std::vector<double> dist;          ///< distance to the closest point found (infinite: none yet)
+  std::vector<Vec3f> cp;             ///< that point
+  std::vector<std::uint8_t> has_cp;  ///< holds a closest point
+  std::vector<std::uint8_t> fixed;   ///< exact (band) or beyond reach: not swept
+};
+
+/// Exact closest points at the nodes within `band` of a triangle's box.
+void exact_band(const Lattice& L, const ClosedPart& c, double band, ClosestPoints& s) {
   for (const auto& tri : c.t) {
     const Vec3d &a = c.v[tri[0]], &b = c.v[tri[1]], &d = c.v[tri[2]];
     int lo[3], hi[3];
@@ -194,30 +194,19 @@ std::vector<double> unsigned_distance(const Lattice& L, const ClosedPart& c, dou
           const Vec3d q = closest_on_triangle(p, a, b, d);
           const double dd = norm(p - q);
           const std::size_t id = L.index(i, j, k);
-          if (dd < dist[id]) dist[id] = dd, cp[id] = {float(q.x), float(q.y), float(q.z)}, has_cp[id] = 1;
+          if (dd < s.dist[id])
+            s.dist[id] = dd, s.cp[id] = {float(q.x), float(q.y), float(q.z)}, s.has_cp[id] = 1;
         }
   }
-  Box3d core;
-  for (const Vec3d& p : c.v) core.extend(p);
-  for (int k = 0; k < L.n; ++k)
-    for (int j = 0; j < L.n; ++j)
-      for (int i = 0; i < L.n; ++i) {
-        const std::size_t id = L.index(i, j, k);
-        if (dist[id] <= band) {
-          fixed[id] = 1;
-          continue;
-        }
-        const Vec3d p = L.node(i, j, k);
-        Vec3d out;
-        for (int a = 0; a < 3; ++a) out[a] = std::max({core.lo[a] - p[a], 0.0, p[a] - core.hi[a]});
-        const double box_distance = norm(out);
-        if (box_distance > reach) dist[id] = box_distance, fixed[id] = 1, has_cp[id] = 0;
-      }
-  const long nn = L.n, sy = nn, sz = nn * nn;
+}
+
+/// The 8 diagonal sweeps: each node not fixed takes the nearest of its 7 upwind neighbours'
+/// closest points (squared distances compared over precomputed index offsets).
+void sweep(const Lattice& L, ClosestPoints& st) {
+  const long sy = L.n, sz = long(L.n) * L.n;
   for (int sweep = 0; sweep < 8; ++sweep) {
     const int s[3] = {sweep & 1 ? -1 : 1, sweep & 2 ? -1 : 1, sweep & 4 ? -1 : 1};
-    // The 7 upwind neighbours as index offsets; `axes` says which axes each one steps along.
-    long offset[8];
+    long offset[8] = {0};
     for (int o = 1; o < 8; ++o)
       offset[o] = -((o & 1) ? s[0] : 0) - ((o & 2) ? s[1] * sy : 0) - ((o & 4) ? s[2] * sz : 0);
     for (int tk = 0; tk < L.n; ++tk)
@@ -226,32 +215,60 @@ std::vector<double> unsigned_distance(const Lattice& L, const ClosedPart& c, dou
           const int i = s[0] > 0 ? ti : L.n - 1 - ti, j = s[1] > 0 ? tj : L.n - 1 - tj,
                     k = s[2] > 0 ? tk : L.n - 1 - tk;
           const std::size_t id = L.index(i, j, k);
-          if (fixed[id]) continue;
-          // An upwind step leaves the lattice only on the first node of a sweep's axis.
+          if (st.fixed[id]) continue;
+          // An upwind step leaves the lattice only from the first node of a sweep's axis.
           const int ok = (ti > 0 ? 1 : 0) | (tj > 0 ? 2 : 0) | (tk > 0 ? 4 : 0);
           const Vec3d pd = L.node(i, j, k);
           const Vec3f p{float(pd.x), float(pd.y), float(pd.z)};
-          float best2 =
-              std::isfinite(dist[id]) ? float(dist[id] * dist[id]) : std::numeric_limits<float>::infinity();
+          float best2 = std::isfinite(st.dist[id]) ? float(st.dist[id] * st.dist[id])
+                                                   : std::numeric_limits<float>::infinity();
           long from = -1;
           for (int o = 1; o < 8; ++o) {
             if ((o & ok) != o) continue;
             const std::size_t nb = std::size_t(long(id) + offset[o]);
-            if (!has_cp[nb]) continue;
-            const Vec3f e = p - cp[nb];
+            if (!st.has_cp[nb]) continue;
+            const Vec3f e = p - st.cp[nb];
             const float d2 = dot(e, e);
             if (d2 < best2) best2 = d2, from = long(nb);
           }
           if (from >= 0) {
-            cp[id] = cp[std::size_t(from)];
-            dist[id] = std::sqrt(double(best2));
-            has_cp[id] = 1;
+            st.cp[id] = st.cp[std::size_t(from)];
+            st.dist[id] = std::sqrt(double(best2));
+            st.has_cp[id] = 1;
           }
         }
   }
-  for (double& d : dist)
-    if (!std::isfinite(d)) d = reach;  // reached by no sweep: beyond `reach` in every direction
-  return dist;
+}
+
+/// Unsigned distance to the triangles: exact at the nodes within 1.5 cells of a triangle's box
+/// (`exact_band`), propagated elsewhere (`sweep`). Only the nodes within `reach` of the closed
+/// part's box are swept; farther ones keep their distance to that box, a lower bound (`t_r` is
+/// 0 there anyway), and nodes no sweep reaches get `reach`.
+std::vector<double> unsigned_distance(const Lattice& L, const ClosedPart& c, double reach) {
+  ClosestPoints st{std::vector<double>(L.size(), kInf), std::vector<Vec3f>(L.size()),
+                   std::vector<std::uint8_t>(L.size(), 0), std::vector<std::uint8_t>(L.size(), 0)};
+  const double band = 1.5 * std::max({L.step.x, L.step.y, L.step.z});
+  exact_band(L, c, band, st);
+  Box3d core;
+  for (const Vec3d& p : c.v) core.extend(p);
+  for (int k = 0; k < L.n; ++k)
+    for (int j = 0; j < L.n; ++j)
+      for (int i = 0; i < L.n; ++i) {
+        const std::size_t id = L.index(i, j, k);
+        if (st.dist[id] <= band) {
+          st.fixed[id] = 1;
+          continue;
+        }
+        const Vec3d p = L.node(i, j, k);
+        Vec3d out;
+        for (int a = 0; a < 3; ++a) out[a] = std::max({core.lo[a] - p[a], 0.0, p[a] - core.hi[a]});
+        const double box_distance = norm(out);
+        if (box_distance > reach) st.dist[id] = box_distance, st.fixed[id] = 1, st.has_cp[id] = 0;
+      }
+  sweep(L, st);
+  for (double& d : st.dist)
+    if (!std::isfinite(d)) d = reach;
+  return st.dist;
 }
 
 /// Inside votes along axis `a`: the signed number of crossings of the ray from each node towards
@@ -414,11 +431,10 @@ Lattice choose_lattice(const ClosedPart& c, const DistanceFitOptions& o, double&
   return L;
 }
 
-}  // namespace
-
-FittedPart fit_part_distance(const MeshPart& part, const PartFitOptions& options) {
+/// The part's input, checked: finite bone of non-zero length, a sub-mesh, indices in range,
+/// finite vertices.
+void check_part(const MeshPart& part) {
   const std::string& name = part.name;
-  validate(options.distance, name);
   require(std::isfinite(part.bone_start.x) && std::isfinite(part.bone_start.y) &&
               std::isfinite(part.bone_start.z) && std::isfinite(part.bone_end.x) &&
               std::isfinite(part.bone_end.y) && std::isfinite(part.bone_end.z),
@@ -432,16 +448,24 @@ FittedPart fit_part_distance(const MeshPart& part, const PartFitOptions& options
         require(false, name + ": triangle " + std::to_string(t),
                 "indexes vertex " + std::to_string(part.triangles[t][k]) + " of " + std::to_string(nv),
                 "fix the indices");
+  Box3d vbox;
   for (std::size_t i = 0; i < part.vertices.size(); ++i) {
     const Vec3d& p = part.vertices[i];
     if (!(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z)))
       require(false, name + ": vertex " + std::to_string(i), "is not finite", "remove NaN/inf vertices");
+    vbox.extend(p);
   }
   const double len = norm(part.bone_end - part.bone_start);
-  Box3d vbox;
-  for (const Vec3d& p : part.vertices) vbox.extend(p);
   require(len > 1e-9 * std::max(1.0, norm(vbox.size())), name + ": bone",
           "has zero length (" + format_number(len) + ")", "give the bone distinct end points");
+}
+
+}  // namespace
+
+FittedPart fit_part_distance(const MeshPart& part, const PartFitOptions& options) {
+  const std::string& name = part.name;
+  validate(options.distance, name);
+  check_part(part);
   FittedPart out;
   out.local_to_world = bone_frame(part.bone_start, part.bone_end);
   std::vector<Vec3d> local(part.vertices.size());
