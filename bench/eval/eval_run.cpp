@@ -206,7 +206,7 @@ std::vector<BakeResult> bake_methods(Run& run, Skinner& skinner, const std::stri
 
 /// The rows, the metrics JSON and the contact sheet of one animation of one rig.
 void evaluate_animation(Run& run, Skinner& skinner, const std::string& label, const EvalAnimation& anim,
-                        bool closed) {
+                        bool closed, const RestAgreement& agreement) {
   const Rig& rig = skinner.rig();
   if (anim.poses.empty()) {
     run.rows.push_back(isokit::eval::error_row(label, anim.name, "—", "no elbow, knee or limb chain found"));
@@ -216,8 +216,7 @@ void evaluate_animation(Run& run, Skinner& skinner, const std::string& label, co
   if (results.empty()) return;
   const std::string dir = run.args.out + "/" + label + "/";
   const ReportContext context{describe(rig, anim), run.args.fps, int(std::thread::hardware_concurrency()),
-                              skinner.fitted().fit_seconds(),
-                              rest_agreement(skinner.fitted(), skinner.field(TreeKind::k2014))};
+                              skinner.fitted().fit_seconds(), agreement};
   const std::string metrics = metrics_json(rig, results, context);
   write_text_file(dir + file_name(anim.name) + ".metrics.json", metrics);
   for (Row& r : isokit::eval::rows_from_metrics(nlohmann::json::parse(metrics), label, anim.name, closed))
@@ -265,10 +264,12 @@ void evaluate_rig(Run& run, const std::string& spec, std::size_t index, std::siz
     return;
   }
   const bool closed = mesh_is_closed(skinner->rig());
+  // Once per rig: the rest mesh and field are those of every animation.
+  const RestAgreement agreement = rest_agreement(skinner->fitted(), skinner->field(TreeKind::k2014));
   for (const EvalAnimation& anim : animations) {
     note(run, "  " + label + " / " + describe(skinner->rig(), anim));
     try {
-      evaluate_animation(run, *skinner, label, anim, closed);
+      evaluate_animation(run, *skinner, label, anim, closed, agreement);
     } catch (const std::exception& e) {
       run.rows.push_back(isokit::eval::error_row(label, anim.name, "—", e.what()));
       note(run, "  " + label + " / " + anim.name + " failed: " + e.what());

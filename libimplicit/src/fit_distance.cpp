@@ -380,29 +380,6 @@ std::vector<float> remapped_nodes(const Lattice& L, const std::vector<double>& d
   return nodes;
 }
 
-void validate(const DistanceFitOptions& o, const std::string& name) {
-  require(o.cells_per_feature >= 1 && o.cells_per_feature <= 16, name + ": distance.cells_per_feature",
-          "must be in [1, 16] (got " + format_number(o.cells_per_feature) + ")", "use the default 3");
-  require(o.feature_percentile > 0 && o.feature_percentile < 1, name + ": distance.feature_percentile",
-          "must be in (0, 1) (got " + format_number(o.feature_percentile) + ")", "use the default 0.25");
-  require(o.width_percentile > 0 && o.width_percentile <= 1, name + ": distance.width_percentile",
-          "must be in (0, 1] (got " + format_number(o.width_percentile) + ")", "use the default 0.9");
-  require(o.min_resolution >= 8 && o.max_resolution <= GridField::kMaxResolution &&
-              o.min_resolution <= o.max_resolution,
-          name + ": distance resolutions",
-          "need 8 <= min_resolution <= max_resolution <= " + std::to_string(GridField::kMaxResolution) +
-              " (got " + std::to_string(o.min_resolution) + ", " + std::to_string(o.max_resolution) + ")",
-          "use the defaults 32 and 64");
-  require(o.overlap_rings >= 0 && o.overlap_rings <= 8, name + ": distance.overlap_rings",
-          "must be in [0, 8] (got " + std::to_string(o.overlap_rings) + ")", "use the default 1");
-  require(o.smoothing_passes >= 0 && o.smoothing_passes <= 8, name + ": distance.smoothing_passes",
-          "must be in [0, 8] (got " + std::to_string(o.smoothing_passes) + ")", "use the default 0");
-  require(o.overlap_sink >= 0 && o.overlap_sink <= 1, name + ": distance.overlap_sink",
-          "must be in [0, 1] (got " + format_number(o.overlap_sink) + ")", "use the default 0.2");
-  require(o.cap_height >= 0 && o.cap_height <= 2, name + ": distance.cap_height",
-          "must be in [0, 2] (got " + format_number(o.cap_height) + ")", "use the default 1");
-}
-
 /// The lattice and `r`: spacing from the thinnest feature, `r` from the width; the box is the
 /// closed part's box grown by `r` and a cell on each axis, so that the field is 0 on its faces.
 /// The same number of nodes on every axis: a long, thin part (a sword, a finger) gets finer
@@ -462,9 +439,32 @@ void check_part(const MeshPart& part) {
 
 }  // namespace
 
+void check_distance_options(const DistanceFitOptions& o, const std::string& where) {
+  require(o.cells_per_feature >= 1 && o.cells_per_feature <= 16, where + ".cells_per_feature",
+          "must be in [1, 16] (got " + format_number(o.cells_per_feature) + ")", "use the default 3");
+  require(o.feature_percentile > 0 && o.feature_percentile < 1, where + ".feature_percentile",
+          "must be in (0, 1) (got " + format_number(o.feature_percentile) + ")", "use the default 0.25");
+  require(o.width_percentile > 0 && o.width_percentile <= 1, where + ".width_percentile",
+          "must be in (0, 1] (got " + format_number(o.width_percentile) + ")", "use the default 0.9");
+  require(o.min_resolution >= 8 && o.max_resolution <= GridField::kMaxResolution &&
+              o.min_resolution <= o.max_resolution,
+          where + ".min_resolution / max_resolution",
+          "need 8 <= min_resolution <= max_resolution <= " + std::to_string(GridField::kMaxResolution) +
+              " (got " + std::to_string(o.min_resolution) + ", " + std::to_string(o.max_resolution) + ")",
+          "use the defaults 32 and 64");
+  require(o.overlap_rings >= 0 && o.overlap_rings <= 8, where + ".overlap_rings",
+          "must be in [0, 8] (got " + std::to_string(o.overlap_rings) + ")", "use the default 1");
+  require(o.smoothing_passes >= 0 && o.smoothing_passes <= 8, where + ".smoothing_passes",
+          "must be in [0, 8] (got " + std::to_string(o.smoothing_passes) + ")", "use the default 0");
+  require(o.overlap_sink >= 0 && o.overlap_sink <= 1, where + ".overlap_sink",
+          "must be in [0, 1] (got " + format_number(o.overlap_sink) + ")", "use the default 0.2");
+  require(o.cap_height >= 0 && o.cap_height <= 2, where + ".cap_height",
+          "must be in [0, 2] (got " + format_number(o.cap_height) + ")", "use the default 1");
+}
+
 FittedPart fit_part_distance(const MeshPart& part, const PartFitOptions& options) {
   const std::string& name = part.name;
-  validate(options.distance, name);
+  check_distance_options(options.distance, name + ": distance");
   check_part(part);
   FittedPart out;
   out.local_to_world = bone_frame(part.bone_start, part.bone_end);

@@ -310,7 +310,7 @@ TEST_CASE("pipeline: bad input to the skinner is rejected naming the item", "[sk
   CHECK(setup_from_json(R"({"fit": {"opening_offset": 1}})", "s.json").fit.opening_offset == 1.0);
   CHECK_THROWS_WITH(setup_from_json(R"({"fit": {"opening_offset": -0.5}})", "s.json"),
                     Catch::Contains("s.json.fit.opening_offset") && Catch::Contains("[0, 2]"));
-  CHECK(s.capsule_match == 0.0);  // share first (docs/skinning.md, "capsule-first is off by default")
+  CHECK(s.capsule_match == 0.0);  // share first (docs/decisions/capsule-first.md)
   CHECK(setup_from_json(R"({"fit": {"capsule_match": 0.5}})", "s.json").capsule_match == 0.5);
   CHECK_THROWS_WITH(setup_from_json(R"({"fit": {"capsule_match": -1}})", "s.json"),
                     Catch::Contains("s.json.fit.capsule_match") && Catch::Contains("[0, 10]"));

@@ -216,28 +216,7 @@ void read_distance_fit(const json& d, const std::string& w, implicit::DistanceFi
   read(d, "overlap_rings", o.overlap_rings, w);
   read(d, "overlap_sink", o.overlap_sink, w);
   read(d, "smoothing_passes", o.smoothing_passes, w);
-  require(o.smoothing_passes >= 0 && o.smoothing_passes <= 8, w + ".smoothing_passes",
-          "must be in [0, 8] (got " + std::to_string(o.smoothing_passes) + ")", "use 0 (the default)");
-  require(std::isfinite(o.overlap_sink) && o.overlap_sink >= 0 && o.overlap_sink <= 1, w + ".overlap_sink",
-          "must be in [0, 1] (got " + format_number(o.overlap_sink) + ")", "use 0.2 (the default)");
-  require(o.overlap_rings >= 0 && o.overlap_rings <= 8, w + ".overlap_rings",
-          "must be in [0, 8] (got " + std::to_string(o.overlap_rings) + ")", "use 1 (the default)");
-  require(std::isfinite(o.cells_per_feature) && o.cells_per_feature >= 1 && o.cells_per_feature <= 16,
-          w + ".cells_per_feature", "must be in [1, 16] (got " + format_number(o.cells_per_feature) + ")",
-          "use 3 (the default)");
-  require(std::isfinite(o.feature_percentile) && o.feature_percentile > 0 && o.feature_percentile < 1,
-          w + ".feature_percentile", "must be in (0, 1) (got " + format_number(o.feature_percentile) + ")",
-          "use 0.25 (the default)");
-  require(std::isfinite(o.width_percentile) && o.width_percentile > 0 && o.width_percentile <= 1,
-          w + ".width_percentile", "must be in (0, 1] (got " + format_number(o.width_percentile) + ")",
-          "use 0.9 (the default)");
-  require(o.min_resolution >= 8 && o.max_resolution <= 256 && o.min_resolution <= o.max_resolution,
-          w + ".min_resolution / max_resolution",
-          "need 8 <= min_resolution <= max_resolution <= 256 (got " + std::to_string(o.min_resolution) +
-              ", " + std::to_string(o.max_resolution) + ")",
-          "use 32 and 64 (the defaults)");
-  require(std::isfinite(o.cap_height) && o.cap_height >= 0 && o.cap_height <= 2, w + ".cap_height",
-          "must be in [0, 2] (got " + format_number(o.cap_height) + ")", "use 1 (the default)");
+  implicit::check_distance_options(o, w);
 }
 
 /// Section `fit`: the fit of each part (implicit::PartFitOptions).

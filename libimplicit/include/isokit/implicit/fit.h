@@ -165,6 +165,10 @@ Rigid3d bone_frame(const Vec3d& a, const Vec3d& b);
 /// surface with no inside.
 FittedPart fit_part_distance(const MeshPart& part, const PartFitOptions& options = {});
 
+/// Checks the distance field's options against their ranges. \throw InputError naming
+/// `where + ".key"` (e.g. a setup file's "s.json.fit.distance", or "part: distance").
+void check_distance_options(const DistanceFitOptions& options, const std::string& where);
+
 /// Fits one part (`options.field`: HRBF or distance field). \throw InputError naming `part.name`: zero-length
 /// bone, empty part, indices out of range, non-finite vertices, fewer than 4 usable samples, inward-oriented
 /// triangles (the samples' normals point towards the bone on average), or a failed HRBF fit.
