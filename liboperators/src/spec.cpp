@@ -145,6 +145,11 @@ void validate(const OperatorSpec& s, const std::string& source) {
           "use e.g. 128 (the paper's grid)");
   require(s.slices >= 8 && s.slices <= 1024, at + "slices",
           "must be in [8, 1024] (got " + std::to_string(s.slices) + ")", "use e.g. 128");
+  const long long cells = static_cast<long long>(s.slices) * s.resolution * s.resolution;
+  require(cells <= kMaxOperatorCells, at + "slices x resolution^2",
+          "is " + std::to_string(cells) + " cells, more than the " + std::to_string(kMaxOperatorCells) +
+              " an operator grid may have (512 MiB)",
+          "lower the resolution or the slices (the paper uses 128 x 128 x 128)");
   require(std::isfinite(s.distance_slope) && s.distance_slope > 0, at + "distance_slope",
           "must be positive (got " + format_number(s.distance_slope) + ")", "use 1");
   try {

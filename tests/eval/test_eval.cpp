@@ -98,7 +98,7 @@ TEST_CASE("eval: a rig folder (a capsule with a clip, a broken file) gives every
   BendSpec wave;
   wave.joint = rig.joint_index("Bone1");
   wave.degrees = 60;
-  rig.clips.push_back(Clip{"wave", 30, bend_animation(rig, {wave}, 9)});
+  rig.clips.push_back(Clip{"wave", 30, bend_animation(rig, {wave}, 9), nullptr});
   save_rig(rig, (dir / "rigs" / "capsule.glb").string());
   std::ofstream(dir / "rigs" / "broken.glb") << "not a glTF file";
 

@@ -73,7 +73,7 @@ inline Rig capsule_rig(int rings = 40, int segments = 24, int cap_rings = 6) {
 /// `r` with one clip named `name`: Bone1 (joint 1) turned by `step` radians more about z at each
 /// of `frames` frames.
 inline Rig with_turn_clip(Rig r, int frames, double step, const std::string& name = "animation_0") {
-  Clip clip{name, 30, {}};
+  Clip clip{name, 30, {}, nullptr};
   for (int f = 0; f < frames; ++f) {
     std::vector<Affine> pose = rest_pose(r);
     pose[1] = pose[1] * Affine(Eigen::AngleAxisd(step * f, Eigen::Vector3d::UnitZ()));

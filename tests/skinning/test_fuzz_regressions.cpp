@@ -59,25 +59,51 @@ TEST_CASE("fuzz: a clip key time far beyond any animation is refused, not sample
                                         Catch::Contains("fix the key times"));
 }
 
-TEST_CASE("fuzz: a clip too long to sample is skipped with a warning, quickly", "[skinning][io][fuzz]") {
+TEST_CASE("fuzz: a clip too long to sample loads at once and is refused only when sampled",
+          "[skinning][io][fuzz]") {
   // Two keys about 13 hours apart (the 15-minute glb run, after 840 s: a libFuzzer timeout):
-  // sampling them at 30 fps took 26 s and 1.8 GB before the mesh was even checked. A clip of more
-  // than 2^22 joint transforms is now skipped with a warning naming it.
+  // sampling them at 30 fps at load took 26 s and 1.8 GB before the mesh was even checked. Clips
+  // now keep their keys and are sampled when a command needs the frames (clip_frames), within
+  // kMaxClipSamples joint transforms.
   const std::string path = std::string(ISOKIT_TEST_SOURCE_DIR) + "/data/fuzz/glb-clip-13-hours.glb";
   LoadOptions o;
   o.skeleton_only = true;
   LoadReport report;
-  std::string error;
-  try {
-    load_rig(path, o, &report);
-  } catch (const InputError& e) {
-    error = e.what();
-  }
-  bool skipped = false;
+  const Rig clips = load_rig(path, o, &report);
+  REQUIRE(clips.clips.size() == 1);
+  CHECK(clips.clips[0].frame_count() > 1000000);
+  CHECK(clips.clips[0].local.empty());
+  bool warned = false;
   for (const auto& w : report.warnings)
-    skipped = skipped || w.find("skipped (sample it at a lower --fps") != std::string::npos;
-  CHECK(skipped);
-  // Its only clip skipped, the clip-file read has nothing to play.
-  CHECK_THAT(error, Catch::Contains("has no animation that moves its skeleton"));
+    warned = warned || w.find("refuse it (sample it at a lower --fps") != std::string::npos;
+  CHECK(warned);
+  CHECK_THROWS_WITH(clip_frames(clips.clips[0]), Catch::Contains("clip '") && Catch::Contains("lower --fps"));
   CHECK_THROWS_AS(load_rig(path), InputError);  // its mesh has no triangles
+}
+
+TEST_CASE("fuzz: an accessor count its buffer view does not hold is refused before allocating",
+          "[skinning][io][fuzz]") {
+  // The one-hour gltf run, at 662 s: inverseBindMatrices claims 333,333,332 MAT4 over a 128-byte
+  // view; the reader allocated 42.6 GB of doubles before checking the view (std::bad_alloc).
+  const std::string path = std::string(ISOKIT_TEST_SOURCE_DIR) + "/data/fuzz/gltf-accessor-count-42GB.gltf";
+  CHECK_THROWS_WITH(load_rig(path), Catch::Contains("inverseBindMatrices (accessor 5)") &&
+                                        Catch::Contains("declares 333333332 elements of 64 bytes") &&
+                                        Catch::Contains("holds 128 bytes"));
+}
+
+TEST_CASE("fuzz: a valid clip of 14 hours is listed without sampling, and sampled on demand within the bound",
+          "[skinning][io][fuzz]") {
+  // The one-hour glb run, at 1,794 s: a 3.5 KB file whose clip spans 14 hours was resampled at
+  // load into 1,545,762 frames (463 MB, 2.2 s for `info`).
+  const std::string path = std::string(ISOKIT_TEST_SOURCE_DIR) + "/data/fuzz/glb-clip-1.5M-frames.glb";
+  const Rig rig = load_rig(path);
+  REQUIRE(rig.clips.size() == 1);
+  CHECK(rig.clips[0].frame_count() == 1545762);
+  CHECK(rig.clips[0].seconds() == Approx(1545761.0 / 30));
+  // 1.5 M frames x 2 joints is within 2^22 transforms: sampled at a lower rate it is small.
+  Clip slow = rig.clips[0];
+  slow.fps = 0.01;
+  const auto frames = clip_frames(slow);
+  CHECK(frames.size() == slow.frame_count());
+  for (const auto& pose : frames) CHECK(pose.size() == rig.joints.size());
 }

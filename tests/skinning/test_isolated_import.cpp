@@ -94,9 +94,11 @@ void check_same_rig(const Rig& a, const LoadReport& ra, const Rig& b, const Load
   for (std::size_t c = 0; c < a.clips.size(); ++c) {
     CHECK(a.clips[c].name == b.clips[c].name);
     CHECK(a.clips[c].fps == b.clips[c].fps);
-    REQUIRE(a.clips[c].local.size() == b.clips[c].local.size());
-    for (std::size_t f = 0; f < a.clips[c].local.size(); ++f)
-      CHECK(same_affines(a.clips[c].local[f], b.clips[c].local[f]));
+    CHECK((a.clips[c].keys == nullptr) == (b.clips[c].keys == nullptr));
+    const auto fa = clip_frames(a.clips[c]);
+    const auto fb = clip_frames(b.clips[c]);
+    REQUIRE(fa.size() == fb.size());
+    for (std::size_t f = 0; f < fa.size(); ++f) CHECK(same_affines(fa[f], fb[f]));
   }
   CHECK(a.output.to_welded == b.output.to_welded);
   CHECK(a.output.triangles == b.output.triangles);

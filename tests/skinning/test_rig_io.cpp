@@ -175,7 +175,7 @@ Rig bar_rig() {
       w.offsets.push_back(static_cast<int>(w.joints.size()));
     }
 
-  Clip wave{"wave", 30, {}};
+  Clip wave{"wave", 30, {}, nullptr};
   for (int f = 0; f < 10; ++f) {
     std::vector<Affine> local = rest_pose(rig);
     const double t = f / 9.0;
@@ -186,7 +186,7 @@ Rig bar_rig() {
     local[5] = local[5] * Affine(Eigen::Scaling(1.0 + 0.2 * t, 1.0, 1.0));
     wave.local.push_back(local);
   }
-  Clip idle{"idle", 30, {}};
+  Clip idle{"idle", 30, {}, nullptr};
   for (int f = 0; f < 3; ++f) {
     std::vector<Affine> local = rest_pose(rig);
     local[4] = local[4] * Affine(Eigen::AngleAxisd(0.2 * f, Eigen::Vector3d::UnitZ()));
@@ -471,12 +471,13 @@ TEST_CASE("rig_io: save -> load keeps joints, 6-influence weights, primitives an
   for (std::size_t c = 0; c < rig.clips.size(); ++c) {
     const Clip& ca = rig.clips[c];
     const Clip& cb = back.clips[c];
+    const auto fb = clip_frames(cb);
     CHECK(cb.name == ca.name);
     CHECK(cb.fps == 30);
-    REQUIRE(cb.local.size() == ca.local.size());
+    REQUIRE(fb.size() == ca.local.size());
     for (std::size_t f = 0; f < ca.local.size(); ++f) {
       const track::Positions pa = output_positions(rig, lbs(rig, ca.local[f]));
-      const track::Positions pb = output_positions(back, lbs(back, cb.local[f]));
+      const track::Positions pb = output_positions(back, lbs(back, fb[f]));
       INFO("clip " << ca.name << " frame " << f);
       CHECK((pa - pb).cwiseAbs().maxCoeff() <= 1e-5 * diag);
     }
@@ -791,9 +792,9 @@ TEST_CASE("rig_io: a mesh with a skeleton but no weights loads with empty weight
   CHECK(rig.joints[1].parent == 0);
   REQUIRE(rig.clips.size() == 1);
   CHECK(rig.clips[0].name == "turn");
-  CHECK(rig.clips[0].local.size() == 31);  // 1 s at 30 fps
+  CHECK(rig.clips[0].frame_count() == 31);  // 1 s at 30 fps
   // The animated joint turns by 90 degrees about z over the clip.
-  const Eigen::Matrix3d end = rig.clips[0].local.back()[1].linear();
+  const Eigen::Matrix3d end = clip_frames(rig.clips[0]).back()[1].linear();
   CHECK(end.isApprox(Eigen::AngleAxisd(isokit::kPi / 2, Eigen::Vector3d::UnitZ()).toRotationMatrix(), 1e-5));
 
   // Skinned, with ignore_weights: skeleton kept, weights dropped.
@@ -879,8 +880,8 @@ TEST_CASE("rig_io: COLLADA skin, bind shape and matrix animation", "[skinning][i
   CHECK(rig.rest.col(0).minCoeff() == Approx(0.0));             // mesh node transform ignored
   REQUIRE(rig.clips.size() == 1);
   CHECK(rig.clips[0].name == "bend");
-  REQUIRE(rig.clips[0].local.size() == 31);
-  const track::Positions end = lbs(rig, rig.clips[0].local.back());
+  REQUIRE(rig.clips[0].frame_count() == 31);
+  const track::Positions end = lbs(rig, clip_frames(rig.clips[0]).back());
   for (Eigen::Index v = 0; v < rig.rest.rows(); ++v) {
     const Eigen::Vector3f r = rig.rest.row(v).transpose();
     Eigen::Vector3f expected = r;
@@ -903,12 +904,12 @@ TEST_CASE("rig_io: sample rigs named by ISOKIT_SAMPLE_RIGS load and skin", "[ski
     s << name << ": " << report.file_vertices << " file vertices -> " << report.welded_vertices << " welded, "
       << rig.triangles.rows() << " triangles, " << report.meshes << " primitive(s), " << rig.joints.size()
       << " joints, max " << report.max_influences << " influences, clips:";
-    for (const Clip& c : rig.clips) s << " " << c.name << "(" << c.local.size() << ")";
+    for (const Clip& c : rig.clips) s << " " << c.name << "(" << c.frame_count() << ")";
     for (const std::string& w : report.warnings) s << "\n  warning: " << w;
     WARN(s.str());
     const double diag = diagonal(rig.rest);
     for (const Clip& c : rig.clips)
-      for (const auto& pose : c.local) {
+      for (const auto& pose : clip_frames(c)) {
         const track::Positions p = lbs(rig, pose);
         REQUIRE(p.allFinite());
         CHECK(diagonal(p) > 0.5 * diag);
@@ -922,10 +923,11 @@ TEST_CASE("rig_io: sample rigs named by ISOKIT_SAMPLE_RIGS load and skin", "[ski
     REQUIRE(back.output.to_welded.size() == rig.output.to_welded.size());
     REQUIRE(back.clips.size() == rig.clips.size());
     for (std::size_t c = 0; c < rig.clips.size(); ++c) {
-      REQUIRE(back.clips[c].local.size() == rig.clips[c].local.size());
-      for (std::size_t f = 0; f < rig.clips[c].local.size(); f += 5)
-        CHECK((output_positions(rig, lbs(rig, rig.clips[c].local[f])) -
-               output_positions(back, lbs(back, back.clips[c].local[f])))
+      const auto fa = clip_frames(rig.clips[c]);
+      const auto fb = clip_frames(back.clips[c]);
+      REQUIRE(fb.size() == fa.size());
+      for (std::size_t f = 0; f < fa.size(); f += 5)
+        CHECK((output_positions(rig, lbs(rig, fa[f])) - output_positions(back, lbs(back, fb[f])))
                   .cwiseAbs()
                   .maxCoeff() <= 1e-5 * diag);
     }

@@ -7,10 +7,12 @@
 #include <chrono>
 #include <cstdio>
 #include <exception>
+#include <new>
 #include <optional>
 #include <string>
 
 #include "isokit/core/error.h"
+#include "isokit/core/stage.h"
 #include "isokit/opdesigner/designer.h"
 #include "isokit/operators/biharmonic.h"
 #include "isokit/operators/checks.h"
@@ -59,6 +61,8 @@ int run_generate(const std::string& preset, const std::string& spec_path, int re
     }
   };
   const auto t0 = std::chrono::steady_clock::now();
+  const Stage stage("generating a " + std::to_string(spec.slices) + " x " + std::to_string(spec.resolution) +
+                    " x " + std::to_string(spec.resolution) + " operator grid");
   BiharmonicOperatorGenerator gen(spec, o);
   const GridOperator grid = gen.generate();
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -215,6 +219,9 @@ int main(int argc, char** argv) {
     }
     if (insp->parsed()) return run_inspect(in_path, quiet);
     if (gui->parsed()) return run_gui_command(gui_options, gui_size);
+  } catch (const std::bad_alloc&) {
+    std::fprintf(stderr, "isokit-opdesigner: error: %s\n", isokit::out_of_memory_message().c_str());
+    return 1;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "isokit-opdesigner: error: %s\n", e.what());
     return 1;

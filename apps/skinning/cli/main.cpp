@@ -12,10 +12,13 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <new>
+#include <optional>
 #include <thread>
 
 #include "isokit/core/error.h"
 #include "isokit/core/math.h"
+#include "isokit/core/stage.h"
 #include "isokit/skinning/bake_job.h"
 #include "isokit/skinning/fit_quality.h"
 #include "isokit/skinning/grid_operators.h"
@@ -25,6 +28,7 @@ using namespace isokit::skinning;
 using isokit::format_number;
 using isokit::kPi;
 using isokit::require;
+using isokit::Stage;
 
 namespace {
 
@@ -77,7 +81,7 @@ void print_info(const Rig& rig, const std::string& spec) {
   }
   std::printf("clips: %zu\n", rig.clips.size());
   for (const Clip& c : rig.clips)
-    std::printf("  %-24s %zu frames at %.1f fps\n", c.name.c_str(), c.local.size(), c.fps);
+    std::printf("  %-24s %zu frames at %.1f fps\n", c.name.c_str(), c.frame_count(), c.fps);
 }
 
 // `info --fit`: what the fit made of every joint: its vertices, the rule that gave them a field,
@@ -279,6 +283,7 @@ void check_numbers(const Args& a) {
 
 /// The rig, its loader warnings printed on stderr.
 Rig open_and_warn(const Args& a, const Progress& progress) {
+  const Stage stage("reading " + a.rig);
   std::vector<std::string> warnings;
   Rig rig = open_rig(a.rig, a.fps, progress, &warnings);
   for (const std::string& w : warnings) std::fprintf(stderr, "  warning: %s\n", w.c_str());
@@ -289,6 +294,7 @@ int run_info(const Args& a, const Progress& progress) {
   Rig rig = open_and_warn(a, progress);
   print_info(rig, a.rig);
   if (a.info_fit) {
+    const Stage stage("fitting the part fields of " + a.rig);
     Skinner skinner(std::move(rig), a.info_setup.empty() ? SkinSetup{} : load_setup(a.info_setup), progress);
     const FitQuality q = print_fit(skinner.fitted());
     print_agreement(q, skinner.fitted(), skinner);
@@ -302,18 +308,26 @@ int run_bake(const Args& a, const std::vector<Method>& methods, Method main, con
   check_device(device_from_string(a.device));
   check_animation_request(a.animation);
   check_bake_outputs(a.outputs);
-  SkinSetup setup = a.setup.empty() ? SkinSetup{} : load_setup(a.setup);
+  SkinSetup setup = [&] {
+    const Stage stage("reading the setup " + a.setup);
+    return a.setup.empty() ? SkinSetup{} : load_setup(a.setup);
+  }();
   if (a.max_step > 0) setup.substeps.max_step_rad = a.max_step;
   std::fprintf(stderr, "isokit-skin: loading %s\n", a.rig.c_str());
   const auto t0 = std::chrono::steady_clock::now();
   const Rig rig = open_and_warn(a, progress);
   AnimationRequest request = a.animation;
   request.fps = a.fps;
-  const Animation animation = make_animation(rig, request, setup.substeps.max_step_rad);
+  const Animation animation = [&] {
+    const Stage stage("sampling the animation of " + a.rig);
+    return make_animation(rig, request, setup.substeps.max_step_rad);
+  }();
   for (const std::string& w : animation.warnings) std::fprintf(stderr, "  warning: %s\n", w.c_str());
   std::fprintf(stderr, "isokit-skin: %lld vertices, %zu joints; fitting\n",
                static_cast<long long>(rig.rest.rows()), rig.joints.size());
+  std::optional<Stage> fitting(std::in_place, "fitting the part fields of " + a.rig);
   Skinner skinner(rig, setup, progress);
+  fitting.reset();
   for (const std::string& w : fit_warnings(skinner.fitted(), setup))
     std::fprintf(stderr, "  warning: %s\n", w.c_str());
   std::fprintf(stderr, "isokit-skin: %d primitives fitted in %.2f s (setup %.2f s)\n",
@@ -323,6 +337,7 @@ int run_bake(const Args& a, const std::vector<Method>& methods, Method main, con
   bo.self_intersections = !a.no_self;
   std::vector<BakeResult> results;
   for (Method m : methods) {
+    const Stage stage("baking " + a.rig + " with " + to_string(m));
     results.push_back(skinner.bake(m, animation.poses, bo));
     const BakeResult& r = results.back();
     std::fprintf(stderr,
@@ -338,6 +353,7 @@ int run_bake(const Args& a, const std::vector<Method>& methods, Method main, con
   if (!a.outputs.render_dir.empty())
     views = bend_views(rig, skinner.fitted().partition(), animation.bends, animation.poses,
                        peak_frame(animation.poses), written);
+  const Stage writing("writing the outputs of " + a.rig);
   for (const std::string& w : write_bake_outputs(rig, results, written, ctx, views, a.outputs))
     std::fprintf(stderr, "  wrote %s\n", w.c_str());
   std::printf("%s — %s, %lld vertices, %zu joints, %d threads\n\n", rig.name.c_str(),
@@ -381,6 +397,11 @@ int main(int argc, char** argv) {
     return run_bake(a, methods, methods[0], progress);
   } catch (const isokit::InputError& e) {
     std::fprintf(stderr, "\nisokit-skin: error: %s\n", e.what());
+    return 2;
+  } catch (const std::bad_alloc&) {
+    // Too large an input (a file's declared sizes are checked before allocating: this is the
+    // machine's limit, or a derived size that no reader bounds).
+    std::fprintf(stderr, "\nisokit-skin: error: %s\n", isokit::out_of_memory_message().c_str());
     return 2;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "\nisokit-skin: internal error: %s\n", e.what());

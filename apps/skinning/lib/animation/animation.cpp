@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <fstream>
 #include <limits>
 #include <nlohmann/json.hpp>
@@ -108,8 +109,9 @@ std::vector<Pose> clip_animation(const Rig& rig, const std::string& name) {
   std::string names;
   for (const Clip& c : rig.clips) {
     if (c.name == name) {
-      require(!c.local.empty(), rig.name + ": clip '" + name + "'", "has no frames", "choose another clip");
-      return c.local;
+      require(c.frame_count() > 0, rig.name + ": clip '" + name + "'", "has no frames",
+              "choose another clip");
+      return clip_frames(c);
     }
     names += (names.empty() ? "" : ", ") + c.name;
   }
@@ -184,9 +186,18 @@ std::vector<Pose> pose_script_from_json(const Rig& rig, const std::string& text,
     const std::string where = source + ": keys[" + std::to_string(k) + "]";
     require(key.is_object() && key.contains("frame") && key["frame"].is_number_integer(), where,
             "needs an integer \"frame\"", "frames are 0, 1, 2, ... in increasing order");
-    const int frame = key["frame"].get<int>();
-    require(frame >= 0 && frame <= 100000 && (keys.empty() || frame > keys.back().first), where,
-            "frames must increase from 0 (got " + std::to_string(frame) + ")", "sort the keys by frame");
+    const auto frame64 = key["frame"].get<std::int64_t>();
+    require(frame64 >= 0 && frame64 <= 100000 && (keys.empty() || frame64 > keys.back().first), where,
+            "frames must increase from 0 and be at most 100000 (got " + std::to_string(frame64) + ")",
+            "sort the keys by frame");
+    const auto frame = static_cast<int>(frame64);
+    // The script expands to (last frame + 1) poses: bounded as a clip's frames are (rig.h).
+    const double samples = double(frame + 1) * double(std::max<std::size_t>(rig.joints.size(), 1));
+    require(samples <= double(kMaxClipSamples), where,
+            "frame " + std::to_string(frame) + " makes the script " + format_number(samples) +
+                " joint transforms, more than the " + std::to_string(kMaxClipSamples) +
+                " an animation may have",
+            "use fewer frames");
     Pose p = rest;
     if (key.contains("joints")) {
       require(key["joints"].is_object(), where + ".joints", "must be an object",

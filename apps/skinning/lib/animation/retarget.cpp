@@ -88,7 +88,7 @@ Clip retarget_clip(const Rig& source, const Clip& clip, const Rig& target, Retar
   Clip out;
   out.name = clip.name;
   out.fps = clip.fps;
-  for (const std::vector<Affine>& frame : clip.local)
+  for (const std::vector<Affine>& frame : clip_frames(clip))
     out.local.push_back(retarget_frame(target, target_rest_world, match, source_rest_world,
                                        world_transforms(source, frame), scale));
   return out;

@@ -13,6 +13,7 @@
 
 #include "isokit/core/atomic_file.h"
 #include "isokit/core/error.h"
+#include "isokit/core/load_budget.h"
 
 namespace isokit::skinning::gltf {
 
@@ -220,7 +221,7 @@ void Builder::write(const std::string& path, bool binary) {
 // ---------------------------------------------------------------------------------------------
 // Reader
 
-tinygltf::Model read_model(const std::string& path, std::vector<std::string>* warnings) {
+tinygltf::Model read_model(const std::string& path, std::vector<std::string>* warnings, LoadBudget* budget) {
   std::ifstream in(path, std::ios::binary);
   require(in.is_open(), path, "cannot open the file", "check that the file exists and is readable");
   const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
@@ -254,6 +255,12 @@ tinygltf::Model read_model(const std::string& path, std::vector<std::string>* wa
   const std::string& version = model.asset.version;
   require(version.rfind("2", 0) == 0, path + ": asset.version", "is not \"2.x\"", "export as glTF 2.0");
   if (warnings != nullptr && !warn.empty()) warnings->push_back("tinygltf: " + one_line(warn));
+  if (budget != nullptr) {
+    // The input: the file, and for a .gltf the buffers it references (files or data URIs, decoded).
+    budget->add_input(bytes.size());
+    for (std::size_t b = 0; !glb && b < model.buffers.size(); ++b)
+      budget->add_input(model.buffers[b].data.size());
+  }
   return model;
 }
 
@@ -291,11 +298,17 @@ double decode_component(const unsigned char* p, int type, bool norm) {
   }
 }
 
-/// Reads `n` elements of `c` components of `type` from view `view` at `offset` into
-/// `put(element, component, value)`; errors name `item`.
-template <class Put>
-void read_view(const tinygltf::Model& m, int view, std::size_t offset, std::size_t n, int type, int c,
-               bool norm, const std::string& item, Put put) {
+/// Where `n` elements of `c` components of `type` lie in buffer view `view` at `offset`, checked
+/// against the view and the view against its buffer before anything is allocated (a file can
+/// declare any count: found by fuzzing, docs/fuzzing.md). Errors name `item`.
+struct ViewSpan {
+  const unsigned char* begin{nullptr};
+  std::size_t stride{0};
+  int component_bytes{0};
+};
+
+ViewSpan locate(const tinygltf::Model& m, int view, std::size_t offset, std::size_t n, int type, int c,
+                const std::string& item) {
   require(view >= 0 && static_cast<std::size_t>(view) < m.bufferViews.size(), item,
           "buffer view " + std::to_string(view) + " does not exist", "fix the file");
   const tinygltf::BufferView& v = m.bufferViews[static_cast<std::size_t>(view)];
@@ -306,45 +319,97 @@ void read_view(const tinygltf::Model& m, int view, std::size_t offset, std::size
   const auto elem = static_cast<std::size_t>(cs * c);
   const std::size_t stride = v.byteStride > 0 ? v.byteStride : elem;
   const std::vector<unsigned char>& data = m.buffers[static_cast<std::size_t>(v.buffer)].data;
-  if (n == 0) return;
-  require(offset + (n - 1) * stride + elem <= v.byteLength && v.byteOffset + v.byteLength <= data.size(),
-          item, "data runs past the end of its buffer view or buffer", "the file is truncated or corrupt");
-  const unsigned char* begin = data.data() + v.byteOffset + offset;
+  require(v.byteLength <= data.size() && v.byteOffset <= data.size() - v.byteLength, item,
+          "buffer view " + std::to_string(view) + " (" + std::to_string(v.byteLength) + " bytes at " +
+              std::to_string(v.byteOffset) + ") runs past the end of its " + std::to_string(data.size()) +
+              "-byte buffer",
+          "the file is truncated or corrupt");
+  // offset + (n - 1) * stride + elem <= byteLength, without overflow.
+  const bool fits = n == 0 || (offset <= v.byteLength && elem <= v.byteLength - offset &&
+                               (n - 1) <= (v.byteLength - offset - elem) / stride);
+  require(fits, item,
+          "declares " + std::to_string(n) + " elements of " + std::to_string(elem) +
+              " bytes but its buffer view " + std::to_string(view) + " holds " +
+              std::to_string(v.byteLength) + " bytes",
+          "the file is truncated or corrupt");
+  return {data.data() + v.byteOffset + offset, stride, cs};
+}
+
+/// Decodes `n` elements of `c` components from a checked span into `put(element, component, value)`.
+template <class Put>
+void decode(const ViewSpan& s, std::size_t n, int type, int c, bool norm, Put put) {
   for (std::size_t e = 0; e < n; ++e)
     for (int k = 0; k < c; ++k)
-      put(e, k, decode_component(begin + e * stride + static_cast<std::size_t>(k * cs), type, norm));
+      put(e, k,
+          decode_component(s.begin + e * s.stride + static_cast<std::size_t>(k * s.component_bytes), type,
+                           norm));
+}
+
+/// Bytes an accessor without a buffer view (zeros, then its sparse values) may declare: as many as
+/// the file's buffers hold together, or `kMinUnbackedBytes` when they hold less.
+constexpr std::uint64_t kMinUnbackedBytes = 1 << 20;
+
+std::uint64_t buffer_bytes(const tinygltf::Model& m) {
+  std::uint64_t total = 0;
+  for (const tinygltf::Buffer& b : m.buffers) total += b.data.size();
+  return total;
 }
 
 }  // namespace
 
 std::vector<double> read_accessor(const tinygltf::Model& m, int index, int* components,
-                                  const std::string& what) {
+                                  const std::string& what, LoadBudget* budget) {
   const std::string item = what + " (accessor " + std::to_string(index) + ")";
   require(index >= 0 && static_cast<std::size_t>(index) < m.accessors.size(), item, "does not exist",
           "fix the file");
   const tinygltf::Accessor& a = m.accessors[static_cast<std::size_t>(index)];
   const int comps = tinygltf::GetNumComponentsInType(static_cast<std::uint32_t>(a.type));
-  require(comps > 0 && tinygltf::GetComponentSizeInBytes(static_cast<std::uint32_t>(a.componentType)) > 0,
-          item, "has an unknown componentType or type", "fix the file");
+  const int cs = tinygltf::GetComponentSizeInBytes(static_cast<std::uint32_t>(a.componentType));
+  require(comps > 0 && cs > 0, item, "has an unknown componentType or type", "fix the file");
   const auto c = static_cast<std::size_t>(comps);
   *components = comps;
+  // Every declared size is checked against what backs it before the first allocation.
+  ViewSpan dense;
+  if (a.bufferView >= 0) {
+    dense = locate(m, a.bufferView, a.byteOffset, a.count, a.componentType, comps, item);
+  } else {
+    const std::uint64_t declared = static_cast<std::uint64_t>(a.count) * c * static_cast<std::uint64_t>(cs);
+    const std::uint64_t bound = std::max(buffer_bytes(m), kMinUnbackedBytes);
+    require(a.count <= bound && declared <= bound, item,
+            "has no buffer view but declares " + std::to_string(a.count) + " elements (" +
+                std::to_string(declared) + " bytes), more than the file's buffers hold (" +
+                std::to_string(buffer_bytes(m)) + " bytes)",
+            "the file is corrupt: fix the accessor's count");
+  }
+  const auto n = static_cast<std::size_t>(a.sparse.isSparse ? std::max(a.sparse.count, 0) : 0);
+  ViewSpan sparse_idx;
+  ViewSpan sparse_val;
+  if (a.sparse.isSparse) {
+    const int itype = a.sparse.indices.componentType;
+    require(itype == kUnsignedByte || itype == kUnsignedShort || itype == kUnsignedInt, item,
+            "sparse index type is invalid", "fix the file");
+    require(n <= a.count, item,
+            "sparse count " + std::to_string(n) + " is larger than the accessor's count " +
+                std::to_string(a.count),
+            "fix the file");
+    sparse_idx = locate(m, a.sparse.indices.bufferView, static_cast<std::size_t>(a.sparse.indices.byteOffset),
+                        n, itype, 1, item + " sparse indices");
+    sparse_val = locate(m, a.sparse.values.bufferView, static_cast<std::size_t>(a.sparse.values.byteOffset),
+                        n, a.componentType, comps, item + " sparse values");
+  }
+  if (budget != nullptr)
+    budget->charge(a.count, c * sizeof(double) + (n > 0 ? sizeof(std::size_t) : 0), item);
   std::vector<double> out(a.count * c, 0.0);
   if (a.bufferView >= 0)
-    read_view(m, a.bufferView, a.byteOffset, a.count, a.componentType, comps, a.normalized, item,
-              [&](std::size_t e, int k, double x) { out[e * c + static_cast<std::size_t>(k)] = x; });
+    decode(dense, a.count, a.componentType, comps, a.normalized,
+           [&](std::size_t e, int k, double x) { out[e * c + static_cast<std::size_t>(k)] = x; });
   if (!a.sparse.isSparse) return out;
-  const auto n = static_cast<std::size_t>(std::max(a.sparse.count, 0));
-  const int itype = a.sparse.indices.componentType;
-  require(itype == kUnsignedByte || itype == kUnsignedShort || itype == kUnsignedInt, item,
-          "sparse index type is invalid", "fix the file");
   std::vector<std::size_t> idx(n);
-  read_view(m, a.sparse.indices.bufferView, static_cast<std::size_t>(a.sparse.indices.byteOffset), n, itype,
-            1, false, item + " sparse indices",
-            [&](std::size_t e, int, double x) { idx[e] = static_cast<std::size_t>(x); });
+  decode(sparse_idx, n, a.sparse.indices.componentType, 1, false,
+         [&](std::size_t e, int, double x) { idx[e] = static_cast<std::size_t>(x); });
   for (std::size_t i : idx) require(i < a.count, item, "sparse index out of range", "fix the file");
-  read_view(m, a.sparse.values.bufferView, static_cast<std::size_t>(a.sparse.values.byteOffset), n,
-            a.componentType, comps, a.normalized, item + " sparse values",
-            [&](std::size_t e, int k, double x) { out[idx[e] * c + static_cast<std::size_t>(k)] = x; });
+  decode(sparse_val, n, a.componentType, comps, a.normalized,
+         [&](std::size_t e, int k, double x) { out[idx[e] * c + static_cast<std::size_t>(k)] = x; });
   return out;
 }
 

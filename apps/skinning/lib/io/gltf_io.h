@@ -25,6 +25,8 @@
 #define TINYGLTF_NO_EXTERNAL_IMAGE
 #include <tiny_gltf.h>
 
+#include "isokit/core/load_budget.h"
+
 namespace isokit::skinning::gltf {
 
 // Component types and buffer-view targets of the glTF 2.0 specification.
@@ -78,18 +80,25 @@ class Builder {
 /// tinygltf's warnings, one line each. \throw InputError naming `path` for a missing magic in a
 /// .glb, a truncated or malformed container, invalid JSON, a buffer that cannot be read, or a
 /// glTF version other than 2.
-tinygltf::Model read_model(const std::string& path, std::vector<std::string>* warnings = nullptr);
+/// `budget`, when given, gets the file's size and its external buffers' as its input.
+tinygltf::Model read_model(const std::string& path, std::vector<std::string>* warnings = nullptr,
+                           LoadBudget* budget = nullptr);
 
 /// The scene of `model` as the loader reads every format: an aiScene built as assimp's glTF
 /// importer builds it (io/gltf_scene.cpp says where and why it differs). `node_names`: one unique
 /// name per node. \throw InputError naming `path` for a node cycle or a bad accessor.
+/// What it decodes is charged to `budget` when given.
 std::unique_ptr<aiScene> to_ai_scene(const tinygltf::Model& model, const std::vector<std::string>& node_names,
-                                     const std::string& path);
+                                     const std::string& path, LoadBudget* budget = nullptr);
 
 /// Reads accessor `index` as doubles (`count * components` values; normalized integers mapped to
-/// [0, 1] / [-1, 1], sparse substitution applied). \throw InputError naming `what` for a bad
-/// accessor (unknown type, view out of range, data past the end of the buffer).
+/// [0, 1] / [-1, 1], sparse substitution applied). Every declared size is checked before anything
+/// is allocated: the count against its buffer view and the view against its buffer, the sparse
+/// count against the accessor's and its views; an accessor without a buffer view may declare at
+/// most as many bytes as the file's buffers hold (or 1 MiB). The decoded doubles are charged to
+/// `budget` when given. \throw InputError naming `what` for a bad accessor (unknown type, a count
+/// its view does not hold, a view out of its buffer, a load past the budget).
 std::vector<double> read_accessor(const tinygltf::Model& model, int index, int* components,
-                                  const std::string& what);
+                                  const std::string& what, LoadBudget* budget = nullptr);
 
 }  // namespace isokit::skinning::gltf

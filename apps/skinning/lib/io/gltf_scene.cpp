@@ -12,7 +12,6 @@
 #include <cstdint>
 #include <map>
 #include <memory>
-#include <set>
 #include <string>
 #include <vector>
 
@@ -69,17 +68,24 @@ T** release_all(std::vector<std::unique_ptr<T>>& items, unsigned* count) {
   return out;
 }
 
+// Bytes charged to the load budget per vertex and per triangle of a primitive: the aiMesh's copy
+// (12 B a vertex; an aiFace and its heap index array, 64 B with the allocator's overhead) and the
+// rig's mesh built from it (positions, the welding tables, output mapping, weights: measured under
+// 200 B a vertex on the real rigs). An upper bound, so that the budget bounds the resident memory.
+constexpr std::uint64_t kSceneBytesPerVertex = 256;
+constexpr std::uint64_t kSceneBytesPerTriangle = 96;
+
 /// Builds the aiScene of one glTF model; `node_names` are the nodes' unique names.
 class SceneBuilder {
  public:
   SceneBuilder(const tinygltf::Model& model, const std::vector<std::string>& node_names,
-               const std::string& path)
-      : m_(model), names_(node_names), path_(path) {}
+               const std::string& path, LoadBudget* budget)
+      : m_(model), names_(node_names), path_(path), budget_(budget) {}
 
   std::unique_ptr<aiScene> build();
 
  private:
-  aiNode* node(int index, std::set<int>& path_nodes);
+  aiNode* node(int index, std::vector<char>& built);
   std::vector<unsigned> meshes_of(int node_index);
   std::unique_ptr<aiMesh> primitive_mesh(const tinygltf::Mesh& mesh, std::size_t mesh_index, std::size_t p);
   void add_bones(aiMesh* mesh, const tinygltf::Primitive& prim, const tinygltf::Skin& skin);
@@ -88,15 +94,17 @@ class SceneBuilder {
   const tinygltf::Model& m_;
   const std::vector<std::string>& names_;
   const std::string& path_;
+  LoadBudget* budget_;
   std::vector<std::unique_ptr<aiMesh>> meshes_;
   std::map<int, std::vector<unsigned>> mesh_ids_;  ///< glTF mesh -> its aiMesh indices
   std::vector<std::unique_ptr<aiCamera>> cameras_;
   std::vector<std::unique_ptr<aiLight>> lights_;
 };
 
-std::vector<float> floats(const tinygltf::Model& m, int accessor, int want, const std::string& what) {
+std::vector<float> floats(const tinygltf::Model& m, int accessor, int want, const std::string& what,
+                          LoadBudget* budget) {
   int comps = 0;
-  const std::vector<double> v = read_accessor(m, accessor, &comps, what);
+  const std::vector<double> v = read_accessor(m, accessor, &comps, what, budget);
   require(comps == want, what, "has " + std::to_string(comps) + " components, not " + std::to_string(want),
           "fix the file or export it again");
   return std::vector<float>(v.begin(), v.end());
@@ -106,8 +114,8 @@ std::vector<float> floats(const tinygltf::Model& m, int accessor, int want, cons
 /// byte, short or int components only. A float accessor here used to be converted to unsigned
 /// with undefined behaviour (1e35; found by fuzzing, docs/fuzzing.md).
 std::vector<std::uint32_t> index_values(const tinygltf::Model& m, int accessor, int* comps,
-                                        const std::string& what) {
-  const std::vector<double> v = read_accessor(m, accessor, comps, what);
+                                        const std::string& what, LoadBudget* budget) {
+  const std::vector<double> v = read_accessor(m, accessor, comps, what, budget);
   const int type = m.accessors[static_cast<std::size_t>(accessor)].componentType;  // index checked
   require(type == kUnsignedByte || type == kUnsignedShort || type == kUnsignedInt,
           what + " (accessor " + std::to_string(accessor) + ")",
@@ -132,7 +140,7 @@ std::unique_ptr<aiMesh> SceneBuilder::primitive_mesh(const tinygltf::Mesh& mesh,
   const auto pos_it = prim.attributes.find("POSITION");
   const std::vector<float> pos = pos_it == prim.attributes.end()
                                      ? std::vector<float>{}
-                                     : floats(m_, pos_it->second, 3, what + " POSITION");
+                                     : floats(m_, pos_it->second, 3, what + " POSITION", budget_);
   const auto nv = static_cast<unsigned>(pos.size() / 3);
   mesh_out->mNumVertices = nv;
   mesh_out->mVertices = new aiVector3D[std::max(nv, 1u)];
@@ -141,7 +149,8 @@ std::unique_ptr<aiMesh> SceneBuilder::primitive_mesh(const tinygltf::Mesh& mesh,
   std::vector<unsigned> idx;
   if (prim.indices >= 0) {
     int comps = 0;
-    for (std::uint32_t x : index_values(m_, prim.indices, &comps, what + " indices")) idx.push_back(x);
+    for (std::uint32_t x : index_values(m_, prim.indices, &comps, what + " indices", budget_))
+      idx.push_back(x);
   } else {
     for (unsigned v = 0; v < nv; ++v) idx.push_back(v);
   }
@@ -155,6 +164,12 @@ std::unique_ptr<aiMesh> SceneBuilder::primitive_mesh(const tinygltf::Mesh& mesh,
                            : std::array<unsigned, 3>{idx[i], idx[i + 1], idx[i + 2]});
   else if (mode == TINYGLTF_MODE_TRIANGLE_FAN)
     for (std::size_t i = 1; i + 1 < idx.size(); ++i) tris.push_back({idx[0], idx[i], idx[i + 1]});
+  // What the scene keeps of the primitive (vertices, faces with their index arrays, allocator
+  // overhead included) and what the rig derives from it later (loader.cpp: merged, welded).
+  if (budget_ != nullptr)
+    budget_->charge(
+        std::uint64_t{nv} * kSceneBytesPerVertex + tris.size() * kSceneBytesPerTriangle,
+        what + " (" + std::to_string(nv) + " vertices, " + std::to_string(tris.size()) + " triangles)");
   mesh_out->mPrimitiveTypes = tris.empty() ? aiPrimitiveType_POINT : aiPrimitiveType_TRIANGLE;
   mesh_out->mNumFaces = static_cast<unsigned>(tris.size());
   mesh_out->mFaces = tris.empty() ? nullptr : new aiFace[tris.size()];
@@ -176,8 +191,8 @@ void SceneBuilder::add_bones(aiMesh* mesh, const tinygltf::Primitive& prim, cons
     if (jt == prim.attributes.end() || wt == prim.attributes.end()) break;
     int jc = 0;
     int wc = 0;
-    const std::vector<std::uint32_t> jv = index_values(m_, jt->second, &jc, path_ + ": JOINTS");
-    const std::vector<double> wv = read_accessor(m_, wt->second, &wc, path_ + ": WEIGHTS");
+    const std::vector<std::uint32_t> jv = index_values(m_, jt->second, &jc, path_ + ": JOINTS", budget_);
+    const std::vector<double> wv = read_accessor(m_, wt->second, &wc, path_ + ": WEIGHTS", budget_);
     for (std::size_t i = 0; i < wv.size() && i < jv.size(); ++i) {
       const std::size_t j = jv[i];
       if (wv[i] > 0 && j < nj)
@@ -187,7 +202,7 @@ void SceneBuilder::add_bones(aiMesh* mesh, const tinygltf::Primitive& prim, cons
   std::vector<double> ibm;
   if (skin.inverseBindMatrices >= 0) {
     int comps = 0;
-    ibm = read_accessor(m_, skin.inverseBindMatrices, &comps, path_ + ": inverseBindMatrices");
+    ibm = read_accessor(m_, skin.inverseBindMatrices, &comps, path_ + ": inverseBindMatrices", budget_);
   }
   std::vector<std::unique_ptr<aiBone>> bones;
   for (std::size_t j = 0; j < nj; ++j) {
@@ -220,11 +235,17 @@ std::vector<unsigned> SceneBuilder::meshes_of(int node_index) {
   return ids;
 }
 
-aiNode* SceneBuilder::node(int index, std::set<int>& path_nodes) {
+/// Builds node `index` and its subtree. A node reached twice — a cycle, a node with two parents, a
+/// root listed twice — is refused: glTF's hierarchy is a forest, and a shared subtree would be
+/// copied once per path (2^depth copies from a chain of shared children).
+aiNode* SceneBuilder::node(int index, std::vector<char>& built) {
   require(index >= 0 && static_cast<std::size_t>(index) < m_.nodes.size(),
           path_ + ": node " + std::to_string(index), "does not exist", "fix the file or export it again");
-  require(path_nodes.insert(index).second, path_ + ": node '" + names_[static_cast<std::size_t>(index)] + "'",
-          "is its own ancestor (a cycle in the node hierarchy)", "fix the file or export it again");
+  char& seen = built[static_cast<std::size_t>(index)];
+  require(!seen, path_ + ": node '" + names_[static_cast<std::size_t>(index)] + "'",
+          "is reached twice in the node hierarchy (a cycle, or a node with two parents)",
+          "fix the file or export it again (glTF nodes form trees)");
+  seen = 1;
   const tinygltf::Node& n = m_.nodes[static_cast<std::size_t>(index)];
   auto out = std::make_unique<aiNode>(names_[static_cast<std::size_t>(index)]);
   out->mTransformation = node_transform(n);
@@ -243,11 +264,10 @@ aiNode* SceneBuilder::node(int index, std::set<int>& path_nodes) {
   // Children are attached as they are built, so that the node frees them if a later one throws.
   out->mChildren = n.children.empty() ? nullptr : new aiNode*[n.children.size()];
   for (int c : n.children) {
-    aiNode* child = node(c, path_nodes);
+    aiNode* child = node(c, built);
     child->mParent = out.get();
     out->mChildren[out->mNumChildren++] = child;
   }
-  path_nodes.erase(index);
   return out.release();
 }
 
@@ -259,10 +279,10 @@ struct Track {
 };
 
 Track read_track(const tinygltf::Model& m, const tinygltf::AnimationSampler& s, int comps,
-                 const std::string& what) {
+                 const std::string& what, LoadBudget* budget) {
   Track t;
-  t.times = floats(m, s.input, 1, what + " input");
-  const std::vector<float> out = floats(m, s.output, comps, what + " output");
+  t.times = floats(m, s.input, 1, what + " input", budget);
+  const std::vector<float> out = floats(m, s.output, comps, what + " output", budget);
   const bool cubic = s.interpolation == "CUBICSPLINE";
   const std::size_t per_key = cubic ? 3 : 1;
   const auto c = static_cast<std::size_t>(comps);
@@ -290,8 +310,8 @@ aiAnimation* SceneBuilder::animation(const tinygltf::Animation& a, std::size_t i
       continue;
     const std::string what =
         path_ + ": animations[" + std::to_string(index) + "] channel " + std::to_string(c);
-    const Track t =
-        read_track(m_, a.samplers[static_cast<std::size_t>(ch.sampler)], target == "rotation" ? 4 : 3, what);
+    const Track t = read_track(m_, a.samplers[static_cast<std::size_t>(ch.sampler)],
+                               target == "rotation" ? 4 : 3, what, budget_);
     std::unique_ptr<aiNodeAnim>& na = channels[ch.target_node];
     if (!na) {
       na = std::make_unique<aiNodeAnim>();
@@ -344,14 +364,14 @@ std::unique_ptr<aiScene> SceneBuilder::build() {
     for (std::size_t i = 0; i < m_.nodes.size(); ++i)
       if (!child[i]) roots.push_back(static_cast<int>(i));
   }
-  std::set<int> path_nodes;
+  std::vector<char> built(m_.nodes.size(), 0);
   if (roots.size() == 1) {
-    scene->mRootNode = node(roots.front(), path_nodes);
+    scene->mRootNode = node(roots.front(), built);
   } else {  // several roots (or none) under one "ROOT", as assimp does
     scene->mRootNode = new aiNode("ROOT");
     scene->mRootNode->mChildren = roots.empty() ? nullptr : new aiNode*[roots.size()];
     for (int r : roots) {
-      aiNode* child = node(r, path_nodes);
+      aiNode* child = node(r, built);
       child->mParent = scene->mRootNode;
       scene->mRootNode->mChildren[scene->mRootNode->mNumChildren++] = child;
     }
@@ -370,8 +390,8 @@ std::unique_ptr<aiScene> SceneBuilder::build() {
 }  // namespace
 
 std::unique_ptr<aiScene> to_ai_scene(const tinygltf::Model& model, const std::vector<std::string>& node_names,
-                                     const std::string& path) {
-  return SceneBuilder(model, node_names, path).build();
+                                     const std::string& path, LoadBudget* budget) {
+  return SceneBuilder(model, node_names, path, budget).build();
 }
 
 }  // namespace isokit::skinning::gltf

@@ -22,8 +22,10 @@
 #include "io/isolated.h"
 #include "io/rig_wire.h"
 #include "isokit/core/error.h"
+#include "isokit/core/load_budget.h"
 #include "isokit/skinning/procedural.h"
 #include "isokit/skinning/rig_io.h"
+#include "rig/clip_keys.h"
 
 namespace isokit::skinning {
 
@@ -34,10 +36,6 @@ namespace fs = std::filesystem;
 // Most frames a clip may have when sampled (a day at 30 fps, 2.6 M frames, is beyond any rig's
 // clip; the bound keeps a corrupt key time from overflowing the frame count).
 constexpr int kMaxClipFrames = 10000000;
-
-// Most joint transforms (frames x joints) a sampled clip may hold: 2^22, 512 MiB of transforms
-// (an hour of 30 fps motion capture on 38 joints). Longer clips are skipped with a warning.
-constexpr double kMaxClipSamples = 4194304;
 
 // Relative tolerance under which two bind matrices of one joint count as equal.
 constexpr double kBindTolerance = 1e-4;
@@ -121,7 +119,7 @@ void unique_node_names(const std::vector<tinygltf::Node>& nodes, GltfInfo& info)
 }
 
 /// Checks every skin's joint indices and inverse bind matrices; collects the joint names.
-void check_skins(const tinygltf::Model& model, const std::string& path, GltfInfo& info) {
+void check_skins(const tinygltf::Model& model, const std::string& path, GltfInfo& info, LoadBudget& budget) {
   std::set<std::string> names;
   for (std::size_t s = 0; s < model.skins.size(); ++s) {
     const std::string what = path + ": skins[" + std::to_string(s) + "]";
@@ -136,7 +134,7 @@ void check_skins(const tinygltf::Model& model, const std::string& path, GltfInfo
     if (model.skins[s].inverseBindMatrices >= 0) {
       int comps = 0;
       const std::vector<double> m = gltf::read_accessor(model, model.skins[s].inverseBindMatrices, &comps,
-                                                        what + ".inverseBindMatrices");
+                                                        what + ".inverseBindMatrices", &budget);
       require(comps == 16 && m.size() >= 16 * joints.size(), what + ".inverseBindMatrices",
               "needs one MAT4 per joint", "fix the file or export it again");
       for (double x : m)
@@ -146,14 +144,33 @@ void check_skins(const tinygltf::Model& model, const std::string& path, GltfInfo
   }
 }
 
+/// Every attribute of a primitive has as many elements as its POSITION (glTF 2.0, 3.7.2.1).
+void check_attribute_counts(const tinygltf::Model& model, const std::map<std::string, int>& attrs,
+                            const std::string& where) {
+  const auto pos = attrs.find("POSITION");
+  if (pos == attrs.end()) return;
+  auto count = [&](int a, const std::string& name) {
+    require(a >= 0 && static_cast<std::size_t>(a) < model.accessors.size(), where + " " + name,
+            "names accessor " + std::to_string(a) + ", which does not exist",
+            "fix the file or export it again");
+    return model.accessors[static_cast<std::size_t>(a)].count;
+  };
+  const std::size_t nv = count(pos->second, "POSITION");
+  for (const auto& [name, a] : attrs)
+    require(count(a, name) == nv, where + " " + name,
+            "has " + std::to_string(count(a, name)) + " elements but POSITION has " + std::to_string(nv),
+            "the file is corrupt: every attribute of a primitive has one element per vertex");
+}
+
 /// Checks one skinned primitive: finite positions, JOINTS_n / WEIGHTS_n in pairs of VEC4 with
 /// non-negative weights on joints below the skin's `njoints`.
 void check_skinned_primitive(const tinygltf::Model& model, const std::map<std::string, int>& attrs,
-                             const std::string& where, std::size_t njoints) {
+                             const std::string& where, std::size_t njoints, LoadBudget& budget) {
+  check_attribute_counts(model, attrs, where);
   if (attrs.count("POSITION")) {
     int comps = 0;
     const std::vector<double> pos =
-        gltf::read_accessor(model, attrs.at("POSITION"), &comps, where + " POSITION");
+        gltf::read_accessor(model, attrs.at("POSITION"), &comps, where + " POSITION", &budget);
     for (std::size_t i = 0; i < pos.size(); ++i)
       require(std::isfinite(pos[i]), where + " vertex " + std::to_string(i / 3), "position is not finite",
               "fix the mesh and export again");
@@ -166,8 +183,8 @@ void check_skinned_primitive(const tinygltf::Model& model, const std::map<std::s
             "fix the file or export it again");
     int jc = 0;
     int wc = 0;
-    const std::vector<double> jv = gltf::read_accessor(model, attrs.at(jn), &jc, where + " " + jn);
-    const std::vector<double> wv = gltf::read_accessor(model, attrs.at(wn), &wc, where + " " + wn);
+    const std::vector<double> jv = gltf::read_accessor(model, attrs.at(jn), &jc, where + " " + jn, &budget);
+    const std::vector<double> wv = gltf::read_accessor(model, attrs.at(wn), &wc, where + " " + wn, &budget);
     require(jc == 4 && wc == 4 && jv.size() == wv.size(), where,
             jn + "/" + wn + " are not VEC4 of equal count", "fix the file or export it again");
     for (std::size_t i = 0; i < wv.size(); ++i) {
@@ -183,7 +200,9 @@ void check_skinned_primitive(const tinygltf::Model& model, const std::map<std::s
 }
 
 /// Checks every node that has a mesh and a skin, and each of its mesh's primitives.
-void check_skinned_nodes(const tinygltf::Model& model, const std::string& path, LoadReport& report) {
+void check_skinned_nodes(const tinygltf::Model& model, const std::string& path, LoadReport& report,
+                         LoadBudget& budget) {
+  std::set<std::pair<std::size_t, std::size_t>> checked;  // (mesh, joint count): each checked once
   for (std::size_t n = 0; n < model.nodes.size(); ++n) {
     const tinygltf::Node& node = model.nodes[n];
     if (node.mesh < 0 || node.skin < 0) continue;
@@ -196,20 +215,22 @@ void check_skinned_nodes(const tinygltf::Model& model, const std::string& path, 
       report.warnings.push_back("node " + quote(gltf_node_name(model.nodes, n)) +
                                 " has a transform; it is ignored because the mesh is skinned (glTF rule)");
     const std::size_t njoints = model.skins[s].joints.size();
+    if (!checked.insert({m, njoints}).second) continue;
     const tinygltf::Mesh& mesh = model.meshes[m];
     const std::string mesh_name = mesh.name.empty() ? "meshes[" + std::to_string(m) + "]" : mesh.name;
     for (std::size_t p = 0; p < mesh.primitives.size(); ++p) {
       const std::string where = path + ": mesh " + quote(mesh_name) + " primitive " + std::to_string(p);
-      check_skinned_primitive(model, mesh.primitives[p].attributes, where, njoints);
+      check_skinned_primitive(model, mesh.primitives[p].attributes, where, njoints, budget);
     }
   }
 }
 
-GltfInfo check_gltf(const tinygltf::Model& model, const std::string& path, LoadReport& report) {
+GltfInfo check_gltf(const tinygltf::Model& model, const std::string& path, LoadReport& report,
+                    LoadBudget& budget) {
   GltfInfo info;
   unique_node_names(model.nodes, info);
-  check_skins(model, path, info);
-  check_skinned_nodes(model, path, report);
+  check_skins(model, path, info, budget);
+  check_skinned_nodes(model, path, report, budget);
   for (std::size_t s = 0; s < model.skins.size(); ++s)
     if (model.skins[s].inverseBindMatrices < 0)
       report.warnings.push_back("skin " + std::to_string(s) +
@@ -352,65 +373,28 @@ std::vector<int> weld(const std::vector<Eigen::Vector3f>& p, double tolerance) {
 // ---------------------------------------------------------------------------------------------
 // Animation sampling
 
-struct Trs {
-  Eigen::Vector3d t{Eigen::Vector3d::Zero()};
-  Eigen::Quaterniond r{Eigen::Quaterniond::Identity()};
-  Eigen::Vector3d s{Eigen::Vector3d::Ones()};
-};
-
-Trs decompose(const Affine& a) {
-  Trs out;
-  out.t = a.translation();
-  Eigen::Matrix3d rot;
-  Eigen::Matrix3d scale;
-  a.computeRotationScaling(&rot, &scale);
-  out.r = Eigen::Quaterniond(rot).normalized();
-  out.s = scale.diagonal();
+// Keys of an assimp channel as a key track (times in ticks; values as the sampler uses them).
+KeyTrack<Eigen::Vector3d> key_track(const aiVectorKey* keys, unsigned n) {
+  KeyTrack<Eigen::Vector3d> out;
+  out.time.reserve(n);
+  out.value.reserve(n);
+  for (unsigned k = 0; k < n; ++k) {
+    out.time.push_back(keys[k].mTime);
+    out.value.emplace_back(keys[k].mValue.x, keys[k].mValue.y, keys[k].mValue.z);
+  }
   return out;
 }
 
-Affine compose(const Trs& x) {
-  Affine a = Affine::Identity();
-  a.translate(x.t);
-  a.rotate(x.r.normalized());
-  a.scale(x.s);
-  return a;
-}
-
-template <typename KeyT>
-std::size_t key_after(const KeyT* keys, unsigned n, double t) {
-  const auto* it = std::upper_bound(keys, keys + n, t, [](double v, const KeyT& k) { return v < k.mTime; });
-  return static_cast<std::size_t>(it - keys);
-}
-
-// Value of an assimp key track at time t: clamped at the ends, `blend(a, b, u)` between the keys
-// around t (lerp for positions and scales, slerp for rotations).
-template <class Key, class Value, class Convert, class Blend>
-Value sample_keys(const Key* keys, unsigned n, double t, const Value& fallback, Convert convert,
-                  Blend blend) {
-  if (n == 0) return fallback;
-  if (t <= keys[0].mTime) return convert(keys[0].mValue);
-  if (t >= keys[n - 1].mTime) return convert(keys[n - 1].mValue);
-  const std::size_t b = key_after(keys, n, t);
-  const std::size_t a = b - 1;
-  const double span = keys[b].mTime - keys[a].mTime;
-  const double u = span > 0 ? (t - keys[a].mTime) / span : 0.0;
-  return blend(convert(keys[a].mValue), convert(keys[b].mValue), u);
-}
-
-Eigen::Vector3d sample(const aiVectorKey* keys, unsigned n, double t, const Eigen::Vector3d& fallback) {
-  return sample_keys(
-      keys, n, t, fallback, [](const aiVector3D& x) { return Eigen::Vector3d(x.x, x.y, x.z); },
-      [](const Eigen::Vector3d& a, const Eigen::Vector3d& b, double u) -> Eigen::Vector3d {
-        return (1 - u) * a + u * b;
-      });
-}
-
-Eigen::Quaterniond sample(const aiQuatKey* keys, unsigned n, double t, const Eigen::Quaterniond& fallback) {
-  return sample_keys(
-      keys, n, t, fallback,
-      [](const aiQuaternion& x) { return Eigen::Quaterniond(x.w, x.x, x.y, x.z).normalized(); },
-      [](const Eigen::Quaterniond& a, const Eigen::Quaterniond& b, double u) { return a.slerp(u, b); });
+KeyTrack<Eigen::Quaterniond> key_track(const aiQuatKey* keys, unsigned n) {
+  KeyTrack<Eigen::Quaterniond> out;
+  out.time.reserve(n);
+  out.value.reserve(n);
+  for (unsigned k = 0; k < n; ++k) {
+    const aiQuaternion& x = keys[k].mValue;
+    out.time.push_back(keys[k].mTime);
+    out.value.push_back(Eigen::Quaterniond(x.w, x.x, x.y, x.z).normalized());
+  }
+  return out;
 }
 
 void check_keys(const aiNodeAnim* ch, const std::string& what) {
@@ -464,7 +448,7 @@ struct FileMesh {
 class Loader {
  public:
   Loader(const std::string& path, const LoadOptions& options, LoadReport& report)
-      : path_(path), options_(options), report_(report) {}
+      : path_(path), options_(options), report_(report), budget_(path, 0) {}
 
   Rig load();
 
@@ -487,14 +471,13 @@ class Loader {
   void weld_weights(const FileMesh& file, const std::vector<int>& first);
   void build_clips();
   std::vector<char> animated_nodes() const;
-  Clip sample_clip(const std::string& name, const std::vector<const aiNodeAnim*>& channel,
-                   const std::vector<char>& relevant, const std::vector<Trs>& rest_trs, double last,
-                   double tps) const;
-  std::vector<Affine> joint_pose(const std::vector<Affine>& local, const std::vector<Affine>& world) const;
+  ClipKeys clip_keys(const std::vector<const aiNodeAnim*>& channel, const std::vector<char>& relevant,
+                     double last, double tps) const;
 
   const std::string& path_;
   const LoadOptions& options_;
   LoadReport& report_;
+  LoadBudget budget_;  ///< glTF: what the readers decode from the file's declared sizes
   GltfInfo gltf_;
   Assimp::Importer importer_;
   std::unique_ptr<aiScene> own_scene_;  ///< glTF: the scene built from the tinygltf model
@@ -945,9 +928,6 @@ void Loader::build_clips() {
   if (!options_.clips) return;
   const std::size_t n = nodes_.list.size();
   const std::vector<char> relevant = animated_nodes();
-  std::vector<Trs> rest_trs(n);
-  for (std::size_t i = 0; i < n; ++i)
-    if (relevant[i]) rest_trs[i] = decompose(nodes_.list[i].local);
   std::set<std::string> used_names;
   for (unsigned a = 0; a < scene_->mNumAnimations; ++a) {
     const aiAnimation* anim = scene_->mAnimations[a];
@@ -981,19 +961,25 @@ void Loader::build_clips() {
             "lasts " + format_number(last) + " s, more than " + std::to_string(kMaxClipFrames) +
                 " frames at " + format_number(options_.fps) + " fps",
             "fix the key times in the file (or sample it at a lower --fps)");
-    // A valid clip too long to sample (found by fuzzing: two keys 13 hours apart took 26 s and
-    // 1.8 GB) is skipped with a warning, so that the rest of the file still loads.
+    // The clip keeps its keys; frames are sampled when a command needs them (clip_frames). A
+    // valid clip of hours (found by fuzzing: a 3.5 KB file whose two keys lie 14 hours apart) is
+    // listed at once and refused, with the fix, only by a command that samples it.
+    Clip clip;
+    clip.name = name;
+    clip.fps = options_.fps;
+    auto keys = std::make_shared<ClipKeys>(clip_keys(channel, relevant, last, tps));
+    budget_.charge(keys->bytes(), "animation " + quote(name) + " keys");
+    clip.keys = std::move(keys);
     const double samples =
-        (std::ceil(last * options_.fps) + 1) * double(std::max<std::size_t>(rig_.joints.size(), 1));
-    if (samples > kMaxClipSamples) {
-      report_.warnings.push_back(
-          "animation " + quote(name) + " lasts " + format_number(last) + " s: " + format_number(samples) +
-          " joint transforms at " + format_number(options_.fps) + " fps, more than the " +
-          std::to_string(kMaxClipSamples) +
-          " a clip may have (512 MiB); skipped (sample it at a lower --fps or cut it)");
-      continue;
-    }
-    rig_.clips.push_back(sample_clip(name, channel, relevant, rest_trs, last, tps));
+        static_cast<double>(clip.frame_count()) * double(std::max<std::size_t>(rig_.joints.size(), 1));
+    if (samples > static_cast<double>(kMaxClipSamples))
+      report_.warnings.push_back("animation " + quote(name) + " lasts " + format_number(last) +
+                                 " s: " + format_number(samples) + " joint transforms at " +
+                                 format_number(options_.fps) + " fps, more than the " +
+                                 std::to_string(kMaxClipSamples) +
+                                 " a clip may be sampled into (512 MiB); commands that need its frames "
+                                 "refuse it (sample it at a lower --fps or cut it)");
+    rig_.clips.push_back(std::move(clip));
   }
 }
 
@@ -1011,60 +997,37 @@ std::vector<char> Loader::animated_nodes() const {
   return relevant;
 }
 
-/// Samples one animation at `LoadOptions::fps` from 0 to `last` seconds (`channel`: per node, its
-/// channel or null for the node's own transform; `tps`: ticks per second).
-Clip Loader::sample_clip(const std::string& name, const std::vector<const aiNodeAnim*>& channel,
-                         const std::vector<char>& relevant, const std::vector<Trs>& rest_trs, double last,
-                         double tps) const {
-  const std::size_t n = nodes_.list.size();
-  Clip clip;
-  clip.name = name;
-  clip.fps = options_.fps;
-  const int frames = static_cast<int>(std::ceil(last * options_.fps - 1e-3)) + 1;
-  std::vector<Affine> local(n, Affine::Identity());
-  std::vector<Affine> world(n, Affine::Identity());
-  for (int f = 0; f < std::max(frames, 1); ++f) {
-    const double ticks = std::min(f / options_.fps, last) * tps;
-    for (std::size_t i = 0; i < n; ++i) {
-      if (!relevant[i]) continue;
-      const aiNodeAnim* ch = channel[i];
-      if (ch == nullptr) {
-        local[i] = nodes_.list[i].local;
-      } else {
-        Trs x;
-        x.t = sample(ch->mPositionKeys, ch->mNumPositionKeys, ticks, rest_trs[i].t);
-        x.r = sample(ch->mRotationKeys, ch->mNumRotationKeys, ticks, rest_trs[i].r);
-        x.s = sample(ch->mScalingKeys, ch->mNumScalingKeys, ticks, rest_trs[i].s);
-        local[i] = compose(x);
-      }
-      const int p = nodes_.list[i].parent;
-      world[i] = p >= 0 && relevant[static_cast<std::size_t>(p)]
-                     ? Affine(world[static_cast<std::size_t>(p)] * local[i])
-                     : local[i];
+/// The key tracks of one animation over the relevant nodes (`channel`: per node, its channel or
+/// null for the node's own transform; `last`: the last key in seconds; `tps`: ticks per second).
+ClipKeys Loader::clip_keys(const std::vector<const aiNodeAnim*>& channel, const std::vector<char>& relevant,
+                           double last, double tps) const {
+  ClipKeys keys;
+  keys.ticks_per_second = tps;
+  keys.last_seconds = last;
+  // Only the relevant nodes are kept, in the same (parents-first) order.
+  std::vector<int> compact(nodes_.list.size(), -1);
+  for (std::size_t i = 0; i < nodes_.list.size(); ++i) {
+    if (!relevant[i]) continue;
+    compact[i] = static_cast<int>(keys.nodes.size());
+    ClipKeys::Node node;
+    node.relevant = true;
+    const int p = nodes_.list[i].parent;
+    node.parent = p >= 0 ? compact[static_cast<std::size_t>(p)] : -1;
+    node.local = nodes_.list[i].local;
+    node.rest = decompose(node.local);
+    if (const aiNodeAnim* ch = channel[i]) {
+      node.keyed = true;
+      node.translation = key_track(ch->mPositionKeys, ch->mNumPositionKeys);
+      node.rotation = key_track(ch->mRotationKeys, ch->mNumRotationKeys);
+      node.scale = key_track(ch->mScalingKeys, ch->mNumScalingKeys);
     }
-    clip.local.push_back(joint_pose(local, world));
+    keys.nodes.push_back(std::move(node));
   }
-  return clip;
-}
-
-/// Joint transforms relative to their parent joints from the nodes' `local` and `world`
-/// transforms of one frame.
-std::vector<Affine> Loader::joint_pose(const std::vector<Affine>& local,
-                                       const std::vector<Affine>& world) const {
-  std::vector<Affine> pose(joint_node_.size());
   for (std::size_t j = 0; j < joint_node_.size(); ++j) {
-    const auto node = static_cast<std::size_t>(joint_node_[j]);
-    const int pj = rig_.joints[j].parent;
-    if (pj < 0)
-      pose[j] = world[node];
-    else if (nodes_.list[node].parent == joint_node_[static_cast<std::size_t>(pj)])
-      pose[j] = local[node];
-    else
-      pose[j] =
-          world[static_cast<std::size_t>(joint_node_[static_cast<std::size_t>(pj)])].inverse(Eigen::Affine) *
-          world[node];
+    keys.joint_node.push_back(compact[static_cast<std::size_t>(joint_node_[j])]);
+    keys.joint_parent.push_back(rig_.joints[j].parent);
   }
-  return pose;
+  return keys;
 }
 
 /// FBX, COLLADA and the other formats: assimp's scene.
@@ -1103,11 +1066,13 @@ Rig Loader::load() {
   const std::string ext = gltf::extension(path_);
   report_.format = ext.empty() ? std::string() : ext.substr(1);
   if (ext == ".gltf" || ext == ".glb") {
-    const tinygltf::Model model = gltf::read_model(path_, &report_.warnings);
-    gltf_ = check_gltf(model, path_, report_);
-    own_scene_ = gltf::to_ai_scene(model, gltf_.node_names, path_);
+    const tinygltf::Model model = gltf::read_model(path_, &report_.warnings, &budget_);
+    gltf_ = check_gltf(model, path_, report_, budget_);
+    own_scene_ = gltf::to_ai_scene(model, gltf_.node_names, path_, &budget_);
     scene_ = own_scene_.get();
   } else {
+    const auto bytes = fs::file_size(path_, ec);
+    budget_.add_input(ec ? 0 : bytes);
     read_with_assimp();
   }
   nodes_ = collect_nodes(scene_, path_);

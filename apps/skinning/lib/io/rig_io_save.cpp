@@ -141,7 +141,8 @@ int add_indices(gltf::Builder& b, const std::vector<std::uint32_t>& idx, std::si
 
 void write_animation(gltf::Builder& b, const Rig& rig, const Clip& clip, const std::vector<Trs>& rest,
                      const std::string& path) {
-  const std::size_t nf = clip.local.size();
+  const std::vector<std::vector<Affine>> frames = clip_frames(clip);
+  const std::size_t nf = frames.size();
   const std::size_t nj = rig.joints.size();
   std::vector<float> times(nf);
   for (std::size_t f = 0; f < nf; ++f) times[f] = static_cast<float>(static_cast<double>(f) / clip.fps);
@@ -169,8 +170,8 @@ void write_animation(gltf::Builder& b, const Rig& rig, const Clip& clip, const s
     bool r_const = true;
     bool s_const = true;
     for (std::size_t f = 0; f < nf; ++f) {
-      const Trs x = to_trs(clip.local[f][j], path + ": clip '" + clip.name + "' frame " + std::to_string(f) +
-                                                 " joint '" + rig.joints[j].name + "'");
+      const Trs x = to_trs(frames[f][j], path + ": clip '" + clip.name + "' frame " + std::to_string(f) +
+                                             " joint '" + rig.joints[j].name + "'");
       t[f] = x.t;
       s[f] = x.s;
       r[f] = x.r;
@@ -468,7 +469,7 @@ void save_rig(const Rig& rig, const std::string& path) {
 
   add_skin(b, rig, joint_nodes.roots);
   for (const Clip& clip : rig.clips)
-    if (!clip.local.empty()) write_animation(b, rig, clip, joint_nodes.rest, path);
+    if (clip.frame_count() > 0) write_animation(b, rig, clip, joint_nodes.rest, path);
   b.write(path, ext == ".glb");
 }
 

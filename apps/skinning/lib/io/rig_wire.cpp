@@ -3,9 +3,11 @@
 
 #include <cstdint>
 #include <cstring>
+#include <memory>
 #include <type_traits>
 
 #include "isokit/core/error.h"
+#include "rig/clip_keys.h"
 
 namespace isokit::skinning::io {
 
@@ -98,6 +100,70 @@ void read_matrix(Reader& r, M& m) {
   if (!values.empty()) std::memcpy(m.data(), values.data(), values.size() * sizeof(typename M::Scalar));
 }
 
+template <class Value>
+void write_track(Writer& w, const KeyTrack<Value>& t) {
+  w.vec(t.time);
+  w.array(t.value.data(), t.value.size());
+}
+
+template <class Value>
+KeyTrack<Value> read_track(Reader& r) {
+  KeyTrack<Value> t;
+  t.time = r.vec<double>();
+  t.value = r.vec<Value>();
+  r.check(t.value.size() == t.time.size());
+  return t;
+}
+
+template <class V, int N>
+V read_fixed(Reader& r) {
+  const std::vector<double> v = r.vec<double>();
+  r.check(v.size() == N);
+  return Eigen::Map<const V>(v.data());
+}
+
+void write_keys(Writer& w, const ClipKeys& k) {
+  w.pod(k.ticks_per_second);
+  w.pod(k.last_seconds);
+  w.pod(static_cast<std::uint64_t>(k.nodes.size()));
+  for (const ClipKeys::Node& n : k.nodes) {
+    w.pod(n.parent);
+    w.pod(static_cast<std::uint8_t>(n.relevant));
+    w.pod(static_cast<std::uint8_t>(n.keyed));
+    w.affine(n.local);
+    w.array(n.rest.t.data(), 3);
+    w.array(n.rest.r.coeffs().data(), 4);
+    w.array(n.rest.s.data(), 3);
+    write_track(w, n.translation);
+    write_track(w, n.rotation);
+    write_track(w, n.scale);
+  }
+  w.vec(k.joint_node);
+  w.vec(k.joint_parent);
+}
+
+ClipKeys read_keys(Reader& r) {
+  ClipKeys k;
+  k.ticks_per_second = r.pod<double>();
+  k.last_seconds = r.pod<double>();
+  k.nodes.resize(r.count(sizeof(int) + 2 + 16 * sizeof(double)));
+  for (ClipKeys::Node& n : k.nodes) {
+    n.parent = r.pod<int>();
+    n.relevant = r.pod<std::uint8_t>() != 0;
+    n.keyed = r.pod<std::uint8_t>() != 0;
+    n.local = r.affine();
+    n.rest.t = read_fixed<Eigen::Vector3d, 3>(r);
+    n.rest.r.coeffs() = read_fixed<Eigen::Vector4d, 4>(r);
+    n.rest.s = read_fixed<Eigen::Vector3d, 3>(r);
+    n.translation = read_track<Eigen::Vector3d>(r);
+    n.rotation = read_track<Eigen::Quaterniond>(r);
+    n.scale = read_track<Eigen::Vector3d>(r);
+  }
+  k.joint_node = r.vec<int>();
+  k.joint_parent = r.vec<int>();
+  return k;
+}
+
 }  // namespace
 
 std::string encode_rig(const Rig& rig, const LoadReport& report) {
@@ -120,6 +186,8 @@ std::string encode_rig(const Rig& rig, const LoadReport& report) {
   for (const Clip& c : rig.clips) {
     w.str(c.name);
     w.pod(c.fps);
+    w.pod(static_cast<std::uint8_t>(c.keys != nullptr));
+    if (c.keys != nullptr) write_keys(w, *c.keys);
     w.pod(static_cast<std::uint64_t>(c.local.size()));
     for (const auto& frame : c.local) {
       w.pod(static_cast<std::uint64_t>(frame.size()));
@@ -162,6 +230,7 @@ void decode_rig(const std::string& bytes, const std::string& source, Rig& rig, L
     Clip c;
     c.name = r.str();
     c.fps = r.pod<double>();
+    if (r.pod<std::uint8_t>() != 0) c.keys = std::make_shared<const ClipKeys>(read_keys(r));
     c.local.resize(r.count(1));
     for (auto& frame : c.local) {
       frame.resize(r.count(16 * sizeof(double)));

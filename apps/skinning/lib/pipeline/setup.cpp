@@ -295,6 +295,12 @@ void read_operators(const json& o, const std::string& w, const std::string& base
           "must be in [8, 1024]", "the paper uses 128");
   require(s.operator_slices >= 8 && s.operator_slices <= 1024, w + ".slices", "must be in [8, 1024]",
           "the paper uses 128");
+  const long long cells =
+      static_cast<long long>(s.operator_slices) * s.operator_resolution * s.operator_resolution;
+  require(cells <= operators::kMaxOperatorCells, w + ".slices x resolution^2",
+          "is " + std::to_string(cells) + " cells, more than the " +
+              std::to_string(operators::kMaxOperatorCells) + " an operator grid may have (512 MiB)",
+          "lower the resolution or the slices (the paper uses 128 x 128 x 128)");
 }
 
 /// Section `tracker`, the repairs: fold repair and orientation repair (track::TrackerOptions).

@@ -46,6 +46,11 @@ struct ProfileCurve {
   std::vector<Point2> polyline(double d) const;
 };
 
+/// Most cells (slices × resolution²) an operator grid may have: 2^27, 512 MiB of floats (e.g.
+/// 512³, or 1024² × 128). A spec or setup file declares the grid's size in a few bytes; the bound
+/// keeps the grid a command derives from it within a documented size (docs/fuzzing.md).
+constexpr long long kMaxOperatorCells = 1LL << 27;
+
 /// What the biharmonic generator builds (2014 §4.2). `validate` checks the ranges below.
 struct OperatorSpec {
   /// Name stored in the file and shown by the tools. Default "custom".
@@ -54,6 +59,7 @@ struct OperatorSpec {
   int resolution{128};
   /// Number of d slices, in [8, 1024]. Default 128 (2014 §6.1).
   int slices{128};
+  /// slices × resolution² is at most `kMaxOperatorCells` (see there).
   /// Slope of the constraint values across the profile, > 0 (g per unit of distance in the
   /// (f1, f2) square): nodes of crossed cells get `0.5 + distance_slope * signed distance`
   /// (2014 §4.2, eq. 2). Default 1, which matches `g(f, 0) = f`.

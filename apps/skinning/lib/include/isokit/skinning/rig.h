@@ -11,6 +11,8 @@
 /// counter-clockwise seen from outside.
 #pragma once
 
+#include <cstddef>
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
@@ -56,12 +58,31 @@ struct SkinWeights {
   int count(int v) const { return offsets[v + 1] - offsets[v]; }
 };
 
-/// An animation clip sampled at `fps`: `local[frame][joint]` local joint transforms.
+struct ClipKeys;
+
+/// An animation clip at `fps`: either sampled frames, `local[frame][joint]` local joint transforms
+/// (procedural clips, clips made in code), or a file's key tracks (`keys`, loaded clips), sampled
+/// by `clip_frames` when a command needs the frames. Copies share the keys.
 struct Clip {
   std::string name;
   double fps{30};
-  std::vector<std::vector<Affine>> local;
+  std::vector<std::vector<Affine>> local;  ///< the frames; empty while the clip is only keyed
+  std::shared_ptr<const ClipKeys> keys;    ///< a file's key tracks (rig/clip_keys.h); may be null
+
+  /// Frames of the clip (`local.size()`, or the keys' span at `fps`, both ends included).
+  std::size_t frame_count() const;
+  /// Length in seconds, `(frame_count() - 1) / fps`.
+  double seconds() const;
 };
+
+/// Most joint transforms (frames x joints) `clip_frames` samples one clip into: 2^22 (512 MiB of
+/// transforms; an hour of 30 fps motion capture on 38 joints).
+constexpr std::size_t kMaxClipSamples = std::size_t{1} << 22;
+
+/// The frames of `clip`: `local` when it has frames, else its keys sampled at `fps`.
+/// \throw InputError naming the clip when frames x joints pass `kMaxClipSamples` (with the fix: a
+/// lower --fps) or a sampled transform is not finite.
+std::vector<std::vector<Affine>> clip_frames(const Clip& clip);
 
 /// How output (unwelded) vertices map to the welded deformation mesh: loaders weld duplicate
 /// positions (split normals / UVs) for the deformation and write the original vertices back.
@@ -82,6 +103,10 @@ struct Rig {
 
   int joint_index(const std::string& name) const;  ///< -1 if absent
 };
+
+/// Samples every clip of `rig` that has only keys into its `local` frames (each as `clip_frames`),
+/// for code that reads or edits frames directly. \throw InputError as `clip_frames`.
+void sample_clips(Rig& rig);
 
 /// Rest local transforms of every joint (the bind pose as a pose).
 std::vector<Affine> rest_pose(const Rig& rig);
