@@ -3,7 +3,8 @@
 # the other, and prints one table row per target: seconds, executions, cov, ft, corpus, findings.
 #   scripts/run-fuzz.sh BUILD_DIR SECONDS [TARGET...]     (targets: glb gltf fbx dae setup spec npy)
 # Corpora grow in BUILD_DIR/corpus/<target> (seeded from BUILD_DIR/seeds/<target>); crashes, hangs
-# (-timeout) and out-of-memory inputs (-rss_limit_mb, -malloc_limit_mb) are kept under
+# (-timeout) and out-of-memory inputs (-rss_limit_mb; -malloc_limit_mb, the load budget of the
+# largest input) are kept under
 # BUILD_DIR/findings/<target>/; the full log is BUILD_DIR/findings/<target>.log.
 set -uo pipefail
 build=${1:?usage: run-fuzz.sh BUILD_DIR SECONDS [TARGET...]}
@@ -13,6 +14,9 @@ targets=("$@")
 [ ${#targets[@]} -gt 0 ] || targets=(glb gltf fbx dae setup spec npy)
 timeout_s=${FUZZ_TIMEOUT:-10}
 rss_mb=${FUZZ_RSS_MB:-2048}
+# Inputs up to max_len bytes (at least the largest seed); one allocation past the load budget of
+# such an input (isokit/core/load_budget.h, printed by isokit_fuzz_seeds --budget-mb) is a finding.
+max_len=${FUZZ_MAX_LEN:-16384}
 export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1}
 export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
 
@@ -36,9 +40,14 @@ for t in "${targets[@]}"; do
       fi
       ;;
   esac
+  len=$max_len
+  for f in "$build/seeds/$t"/*; do
+    [ -f "$f" ] && [ "$(stat -c %s "$f")" -gt "$len" ] && len=$(stat -c %s "$f")
+  done
+  malloc_mb=$("$build/fuzz/isokit_fuzz_seeds" --budget-mb "$len")
   start=$(date +%s)
-  "$exe" -max_total_time="$seconds" -timeout="$timeout_s" -rss_limit_mb="$rss_mb" \
-    -malloc_limit_mb="$rss_mb" "${extra[@]}" -print_final_stats=1 -artifact_prefix="$findings/" \
+  "$exe" -max_total_time="$seconds" -timeout="$timeout_s" -rss_limit_mb="$rss_mb" -max_len="$len" \
+    -malloc_limit_mb="$malloc_mb" "${extra[@]}" -print_final_stats=1 -artifact_prefix="$findings/" \
     "$corpus" "$build/seeds/$t" > "$build/findings/$t.log" 2>&1
   rc=$?
   elapsed=$(( $(date +%s) - start ))
