@@ -7,12 +7,14 @@
 #include <ctime>
 #include <filesystem>
 #include <map>
+#include <new>
 #include <set>
 #include <thread>
 
 #include "eval_joints.h"
 #include "eval_rows.h"
 #include "isokit/core/error.h"
+#include "isokit/core/stage.h"
 #include "isokit/skinning/bake_job.h"
 
 using namespace isokit::skinning;
@@ -21,6 +23,14 @@ using isokit::eval::EvalOptions;
 using isokit::eval::Row;
 
 namespace {
+
+/// An error's one-line text: a std::bad_alloc (no message of its own) says the stage it ended.
+std::string error_text(const std::exception& e) {
+  std::string why =
+      dynamic_cast<const std::bad_alloc*>(&e) != nullptr ? isokit::out_of_memory_message() : e.what();
+  isokit::Stage::clear_failed();
+  return why;
+}
 
 using Args = EvalOptions;
 
@@ -192,13 +202,15 @@ std::vector<BakeResult> bake_methods(Run& run, Skinner& skinner, const std::stri
   for (const std::string& name : run.args.methods) {
     const auto t0 = std::chrono::steady_clock::now();
     try {
+      const isokit::Stage stage("baking " + label + " / " + anim.name + " with " + name);
       results.push_back(skinner.bake(method_from_string(name), anim.poses, options));
       note(run, "  " + label + " / " + anim.name + " / " + name + ": " +
                     isokit::format_number(results.back().mean_ms) + " ms/frame (" +
                     isokit::format_number(seconds_since(t0)) + " s with metrics)");
     } catch (const std::exception& e) {
-      run.rows.push_back(isokit::eval::error_row(label, anim.name, name, e.what()));
-      note(run, "  " + label + " / " + anim.name + " / " + name + " failed: " + e.what());
+      const std::string why = error_text(e);
+      run.rows.push_back(isokit::eval::error_row(label, anim.name, name, why));
+      note(run, "  " + label + " / " + anim.name + " / " + name + " failed: " + why);
     }
   }
   return results;
@@ -249,6 +261,7 @@ void evaluate_rig(Run& run, const std::string& spec, std::size_t index, std::siz
   std::unique_ptr<Skinner> skinner;
   std::vector<EvalAnimation> animations;
   try {
+    const isokit::Stage stage("loading and fitting " + spec);
     Rig rig = open_rig(spec, run.args.fps);
     animations = animations_of(rig, run.args);
     note(run, "  " + label + ": " + std::to_string(rig.rest.rows()) + " vertices, " +
@@ -258,8 +271,9 @@ void evaluate_rig(Run& run, const std::string& spec, std::size_t index, std::siz
                                         run.args.setup.empty() ? SkinSetup{} : load_setup(run.args.setup),
                                         fit_progress(run, label));
   } catch (const std::exception& e) {
-    run.rows.push_back(isokit::eval::error_row(label, "—", "—", e.what()));
-    note(run, "  " + label + " failed: " + e.what());
+    const std::string why = error_text(e);
+    run.rows.push_back(isokit::eval::error_row(label, "—", "—", why));
+    note(run, "  " + label + " failed: " + why);
     write_tables(run);
     return;
   }
@@ -271,8 +285,9 @@ void evaluate_rig(Run& run, const std::string& spec, std::size_t index, std::siz
     try {
       evaluate_animation(run, *skinner, label, anim, closed, agreement);
     } catch (const std::exception& e) {
-      run.rows.push_back(isokit::eval::error_row(label, anim.name, "—", e.what()));
-      note(run, "  " + label + " / " + anim.name + " failed: " + e.what());
+      const std::string why = error_text(e);
+      run.rows.push_back(isokit::eval::error_row(label, anim.name, "—", why));
+      note(run, "  " + label + " / " + anim.name + " failed: " + why);
     }
     write_tables(run);
   }
