@@ -46,7 +46,7 @@ test-release: build
 
 test-asan: deps
 	cmake -S . -B $(ASAN_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DISOKIT_SANITIZE=ON \
-	  -DISOKIT_CUDA=OFF -DISOKIT_APPS=OFF -DISOKIT_BENCH=OFF $(CMAKE_ARGS)
+	  -DISOKIT_CUDA=OFF -DISOKIT_APPS=OFF -DISOKIT_BENCH=OFF -DISOKIT_PYTHON=OFF $(CMAKE_ARGS)
 	cmake --build $(ASAN_BUILD) -j $(JOBS)
 	ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 \
 	  ctest --test-dir $(ASAN_BUILD) --output-on-failure -j $(JOBS) -L unit
@@ -82,7 +82,8 @@ bench-studio: build
 fuzz: deps
 	@command -v clang++ >/dev/null || { echo "make fuzz needs clang (libFuzzer): apt-get install clang"; exit 1; }
 	CC=clang CXX=clang++ cmake -S . -B $(FUZZ_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DISOKIT_FUZZ=ON \
-	  -DISOKIT_APPS=ON -DISOKIT_CUDA=OFF -DISOKIT_BENCH=OFF -DISOKIT_TESTS=OFF -DISOKIT_WERROR=OFF $(CMAKE_ARGS)
+	  -DISOKIT_APPS=ON -DISOKIT_CUDA=OFF -DISOKIT_BENCH=OFF -DISOKIT_TESTS=OFF -DISOKIT_WERROR=OFF \
+	  -DISOKIT_PYTHON=OFF $(CMAKE_ARGS)
 	cmake --build $(FUZZ_BUILD) -j $(JOBS) --target isokit_fuzz_all
 	rm -rf $(FUZZ_BUILD)/seeds && $(FUZZ_BUILD)/fuzz/isokit_fuzz_seeds $(FUZZ_BUILD)/seeds
 	ISOKIT_FUZZ_ISOLATE=$(FUZZ_ISOLATE) scripts/run-fuzz.sh $(FUZZ_BUILD) $(FUZZ_SECONDS) $(FUZZ_TARGETS)

@@ -20,6 +20,8 @@ packages=(
   libglfw3-dev libimgui-dev               # interactive GUIs
   xvfb xauth libgl1-mesa-dri              # headless GUI tests (xvfb-run, Mesa software GL)
   catch2 libbenchmark-dev                 # tests, benchmarks
+  python3-dev pybind11-dev                # the Python module (docs/python.md)
+  python3-numpy python3-pytest python3-matplotlib  # its arrays, tests and docs examples
 )
 
 missing=()

@@ -332,6 +332,7 @@ ViewSpan locate(const tinygltf::Model& m, int view, std::size_t offset, std::siz
               " bytes but its buffer view " + std::to_string(view) + " holds " +
               std::to_string(v.byteLength) + " bytes",
           "the file is truncated or corrupt");
+  if (n == 0) return {nullptr, stride, cs};  // nothing is read: no pointer past the buffer is formed
   return {data.data() + v.byteOffset + offset, stride, cs};
 }
 

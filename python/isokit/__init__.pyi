@@ -1,0 +1,10 @@
+# SPDX-License-Identifier: MIT
+# Type stubs of the isokit package for editors (the extension is isokit._isokit).
+__version__: str
+
+class InputError(ValueError): ...
+
+def set_num_threads(n: int) -> None: ...
+def get_num_threads() -> int: ...
+
+from . import operators as operators

@@ -1,0 +1,11 @@
+# SPDX-License-Identifier: MIT
+# pytest setup of the isokit module's tests (CTest label python; docs/python.md).
+import os
+
+import pytest
+
+
+@pytest.fixture
+def source_dir():
+    """tests/ of the source tree (test data)."""
+    return os.environ.get("ISOKIT_TEST_SOURCE_DIR", os.path.dirname(os.path.dirname(__file__)))
