@@ -4,6 +4,7 @@
 The C++ library from Python, with NumPy arrays in and out (docs/python.md):
 
 - ``isokit.operators``: operator specs, the 2014 biharmonic generator, controllers, checks.
+- ``isokit.fields``: primitives, HRBFs fitted to points, grids, compositions; values and gradients.
 
 Bad input raises ``isokit.InputError`` (a ``ValueError``) with isokit's one-line message.
 """
@@ -12,6 +13,7 @@ import sys as _sys
 import numpy as _np
 
 from ._isokit import InputError, __version__, get_num_threads, set_num_threads
+from ._isokit import fields
 from ._isokit import operators as _operators
 
 _evaluate_arrays = _operators.evaluate
@@ -38,5 +40,6 @@ operators = _operators
 operators.evaluate_arrays = _evaluate_arrays
 operators.evaluate = _evaluate
 _sys.modules[__name__ + ".operators"] = operators  # import isokit.operators
+_sys.modules[__name__ + ".fields"] = fields
 
-__all__ = ["InputError", "__version__", "get_num_threads", "set_num_threads", "operators"]
+__all__ = ["InputError", "__version__", "get_num_threads", "set_num_threads", "operators", "fields"]

@@ -62,5 +62,6 @@ void run_released(const py::object& callback,
                   const std::function<void(const std::function<void(int, int)>&)>& work);
 
 void bind_operators(py::module_& m);
+void bind_fields(py::module_& m);
 
 }  // namespace isokit::python

@@ -99,4 +99,6 @@ PYBIND11_MODULE(_isokit, m) {
   py::module_ ops =
       m.def_submodule("operators", "Composition operators: profiles, the biharmonic generator, controllers");
   bind_operators(ops);
+  py::module_ fields = m.def_submodule("fields", "Fields: primitives, HRBFs, grids and their compositions");
+  bind_fields(fields);
 }
