@@ -5,6 +5,7 @@ The C++ library from Python, with NumPy arrays in and out (docs/python.md):
 
 - ``isokit.operators``: operator specs, the 2014 biharmonic generator, controllers, checks.
 - ``isokit.fields``: primitives, HRBFs fitted to points, grids, compositions; values and gradients.
+- ``isokit.tracker``: the 2014 iso-surface tracker on a NumPy mesh, for isokit or Python fields.
 
 Bad input raises ``isokit.InputError`` (a ``ValueError``) with isokit's one-line message.
 """
@@ -13,7 +14,7 @@ import sys as _sys
 import numpy as _np
 
 from ._isokit import InputError, __version__, get_num_threads, set_num_threads
-from ._isokit import fields
+from ._isokit import fields, tracker
 from ._isokit import operators as _operators
 
 _evaluate_arrays = _operators.evaluate
@@ -41,5 +42,6 @@ operators.evaluate_arrays = _evaluate_arrays
 operators.evaluate = _evaluate
 _sys.modules[__name__ + ".operators"] = operators  # import isokit.operators
 _sys.modules[__name__ + ".fields"] = fields
+_sys.modules[__name__ + ".tracker"] = tracker
 
-__all__ = ["InputError", "__version__", "get_num_threads", "set_num_threads", "operators", "fields"]
+__all__ = ["InputError", "__version__", "get_num_threads", "set_num_threads", "operators", "fields", "tracker"]

@@ -9,3 +9,4 @@ def get_num_threads() -> int: ...
 
 from . import fields as fields
 from . import operators as operators
+from . import tracker as tracker

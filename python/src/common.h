@@ -12,6 +12,7 @@
 #include <pybind11/stl.h>
 
 #include <functional>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -55,13 +56,35 @@ py::array_t<T, py::array::c_style> real_array(py::handle obj, const char* name,
   return out;
 }
 
-/// Runs `work(progress)` with the GIL released. `callback` (a Python callable or None) gets
-/// `(done, total)` from `progress`, which is called on any thread; Ctrl+C (or an exception in the
-/// callback) stops the work at its next progress report and is raised in the caller.
-void run_released(const py::object& callback,
-                  const std::function<void(const std::function<void(int, int)>&)>& work);
+/// Long C++ work with the GIL released, calling back into Python (a progress callback, a field
+/// written in Python) on any thread: `call` takes the GIL, runs the Python code and, when it raises
+/// — or Ctrl+C was pressed — keeps the Python error and stops the C++ work with an exception of its
+/// own; `run` then raises that error in the caller. Calls into Python are serialised.
+class Released {
+ public:
+  /// Runs `work()` without the GIL; re-raises a Python error that `call` kept.
+  void run(const std::function<void()>& work);
+  /// Runs `python()` with the GIL held (from any thread). \throw Stopped after a Python error.
+  void call(const std::function<void()>& python);
+  /// A progress function for C++ code: calls `callback(done, total)` when it is not None, and
+  /// checks for Ctrl+C. `callback` must outlive the work.
+  std::function<void(int, int)> progress(const py::object& callback);
+
+  struct Stopped {};
+
+ private:
+  std::mutex mutex_;
+  bool stopped_{false};
+  PyObject* type_{nullptr};
+  PyObject* value_{nullptr};
+  PyObject* traceback_{nullptr};
+};
 
 void bind_operators(py::module_& m);
 void bind_fields(py::module_& m);
+void bind_tracker(py::module_& m);
+
+/// The Python type of isokit.InputError (set when the module is imported).
+extern PyObject* input_error_type;
 
 }  // namespace isokit::python

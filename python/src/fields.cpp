@@ -188,6 +188,14 @@ operators::Controller controller_of(const py::object& c, const char* fallback) {
 
 }  // namespace
 
+bool is_isokit_field(const py::object& field) {
+  return py::isinstance<PyField>(field);
+}
+
+const Field& field_evaluator(const py::object& field) {
+  return field.cast<const PyField&>().evaluator();
+}
+
 void bind_fields(py::module_& m) {
   py::class_<PyField>(m, "Field",
                       "An isokit field: values in [0, 1], 0.5 on the surface, > 0.5 inside, gradients "

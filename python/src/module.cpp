@@ -13,50 +13,55 @@ namespace isokit::python {
 
 namespace {
 
-/// Thrown on a worker thread when the Python side asked to stop (Ctrl+C, or an exception raised
-/// by the progress callback); the Python error waits in `Stop::pending` for the caller.
-struct Stop {
-  PyObject* type{nullptr};
-  PyObject* value{nullptr};
-  PyObject* traceback{nullptr};
-};
-
 std::unique_ptr<tbb::global_control> thread_limit;
 
 }  // namespace
 
-void run_released(const py::object& callback,
-                  const std::function<void(const std::function<void(int, int)>&)>& work) {
-  std::mutex m;
-  Stop pending;
-  bool stopped = false;
-  const bool has_callback = !callback.is_none();
-  auto progress = [&](int done, int total) {
-    std::lock_guard<std::mutex> lock(m);
-    if (stopped) throw Stop{};
-    py::gil_scoped_acquire gil;
-    bool failed = PyErr_CheckSignals() != 0;
-    if (!failed && has_callback) {
-      try {
-        callback(done, total);
-      } catch (py::error_already_set& e) {
-        e.restore();
-        failed = true;
-      }
+PyObject* input_error_type = PyExc_ValueError;
+
+void Released::call(const std::function<void()>& python) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (stopped_) throw Stopped{};
+  py::gil_scoped_acquire gil;
+  bool failed = PyErr_CheckSignals() != 0;
+  if (!failed) {
+    try {
+      python();
+    } catch (py::error_already_set& e) {
+      e.restore();
+      failed = true;
+    } catch (const InputError& e) {
+      PyErr_SetString(input_error_type, e.what());
+      failed = true;
     }
-    if (failed) {
-      PyErr_Fetch(&pending.type, &pending.value, &pending.traceback);
-      stopped = true;
-      throw Stop{};
-    }
+  }
+  if (failed) {
+    PyErr_Fetch(&type_, &value_, &traceback_);
+    stopped_ = true;
+    throw Stopped{};
+  }
+}
+
+std::function<void(int, int)> Released::progress(const py::object& callback) {
+  // Copies of the function are made without the GIL: it holds the callback by pointer (the
+  // caller's argument outlives the work), not a py::object whose copy would touch its refcount.
+  const py::object* cb = &callback;
+  return [this, cb](int done, int total) {
+    call([&] {
+      if (!cb->is_none()) (*cb)(done, total);
+    });
   };
+}
+
+void Released::run(const std::function<void()>& work) {
   try {
     py::gil_scoped_release release;
-    work(progress);
-  } catch (const Stop&) {
+    work();
+  } catch (const Stopped&) {
   }
-  if (stopped) {
-    PyErr_Restore(pending.type, pending.value, pending.traceback);
+  if (stopped_) {
+    PyErr_Restore(type_, value_, traceback_);
+    type_ = value_ = traceback_ = nullptr;
     throw py::error_already_set();
   }
 }
@@ -70,6 +75,7 @@ PYBIND11_MODULE(_isokit, m) {
   m.attr("__version__") = ISOKIT_VERSION;
   // isokit::InputError (bad input: a file, an argument) -> isokit.InputError, a ValueError.
   static py::exception<isokit::InputError> input_error(m, "InputError", PyExc_ValueError);
+  input_error_type = input_error.ptr();
   py::register_exception_translator([](std::exception_ptr p) {
     try {
       if (p) std::rethrow_exception(p);
@@ -101,4 +107,6 @@ PYBIND11_MODULE(_isokit, m) {
   bind_operators(ops);
   py::module_ fields = m.def_submodule("fields", "Fields: primitives, HRBFs, grids and their compositions");
   bind_fields(fields);
+  py::module_ tracker = m.def_submodule("tracker", "The 2014 iso-surface tracker on NumPy meshes");
+  bind_tracker(tracker);
 }

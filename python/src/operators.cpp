@@ -129,10 +129,9 @@ void bind_operators(py::module_& m) {
         BiharmonicOptions o;
         o.backend = to_backend(backend);
         GridOperator grid;
-        run_released(progress, [&](const std::function<void(int, int)>& report) {
-          o.progress = report;
-          grid = generate_operator(s, o);
-        });
+        Released released;
+        o.progress = released.progress(progress);
+        released.run([&] { grid = generate_operator(s, o); });
         return grid_array(std::move(grid));
       },
       py::arg("spec"), py::kw_only(), py::arg("backend") = "auto", py::arg("progress") = py::none(),
