@@ -6,6 +6,7 @@ The C++ library from Python, with NumPy arrays in and out (docs/python.md):
 - ``isokit.operators``: operator specs, the 2014 biharmonic generator, controllers, checks.
 - ``isokit.fields``: primitives, HRBFs fitted to points, grids, compositions; values and gradients.
 - ``isokit.tracker``: the 2014 iso-surface tracker on a NumPy mesh, for isokit or Python fields.
+- ``isokit.skinning``: rigs, their implicit skins and bakes, as ``isokit-skin bake``.
 
 Bad input raises ``isokit.InputError`` (a ``ValueError``) with isokit's one-line message.
 """
@@ -43,5 +44,11 @@ operators.evaluate = _evaluate
 _sys.modules[__name__ + ".operators"] = operators  # import isokit.operators
 _sys.modules[__name__ + ".fields"] = fields
 _sys.modules[__name__ + ".tracker"] = tracker
+try:  # isokit.skinning: built with the skinning library (ISOKIT_APPS, the default)
+    from ._isokit import skinning
 
-__all__ = ["InputError", "__version__", "get_num_threads", "set_num_threads", "operators", "fields", "tracker"]
+    _sys.modules[__name__ + ".skinning"] = skinning
+except ImportError:
+    pass
+
+__all__ = ["InputError", "__version__", "get_num_threads", "set_num_threads", "operators", "fields", "tracker", "skinning"]

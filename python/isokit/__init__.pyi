@@ -9,4 +9,5 @@ def get_num_threads() -> int: ...
 
 from . import fields as fields
 from . import operators as operators
+from . import skinning as skinning
 from . import tracker as tracker

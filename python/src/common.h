@@ -83,6 +83,7 @@ class Released {
 void bind_operators(py::module_& m);
 void bind_fields(py::module_& m);
 void bind_tracker(py::module_& m);
+void bind_skinning(py::module_& m);
 
 /// The Python type of isokit.InputError (set when the module is imported).
 extern PyObject* input_error_type;

@@ -109,4 +109,8 @@ PYBIND11_MODULE(_isokit, m) {
   bind_fields(fields);
   py::module_ tracker = m.def_submodule("tracker", "The 2014 iso-surface tracker on NumPy meshes");
   bind_tracker(tracker);
+#ifdef ISOKIT_PYTHON_SKINNING
+  py::module_ skinning = m.def_submodule("skinning", "Rigs, implicit skins and bakes (as isokit-skin)");
+  bind_skinning(skinning);
+#endif
 }

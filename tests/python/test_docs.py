@@ -27,3 +27,4 @@ def test_every_snippet_runs(tmp_path, monkeypatch, capsys):
             pytest.fail(f"docs/python.md snippet {i + 1} failed: {type(e).__name__}: {e}")
     assert (tmp_path / "contact-slices.png").stat().st_size > 1000
     assert (tmp_path / "elbow.png").stat().st_size > 1000
+    assert (tmp_path / "cylinder-tracked.pc2").stat().st_size > 1000

@@ -1,0 +1,96 @@
+# SPDX-License-Identifier: MIT
+"""isokit.skinning from Python: rigs, clips, bakes; a Python bake equals the CLI's bit for bit."""
+import os
+import subprocess
+
+import numpy as np
+import pytest
+
+import isokit
+
+skinning = pytest.importorskip("isokit.skinning", reason="isokit built without the skinning library")
+CLI = os.environ.get("ISOKIT_SKIN_EXE", "")
+
+
+def bend_poses(rig, joint, degrees, frames):
+    """Local transforms bending `joint` about x from rest to `degrees`."""
+    rest = rig.rest_pose()
+    poses = np.repeat(rest[None], frames, axis=0)
+    j = rig.joints.index(joint)
+    for f in range(frames):
+        a = np.radians(degrees) * f / (frames - 1)
+        r = np.eye(4)
+        r[1:3, 1:3] = [[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]]
+        poses[f, j] = rest[j] @ r
+    return poses
+
+
+@pytest.fixture(scope="module")
+def cylinder_file(tmp_path_factory):
+    rig = skinning.load("procedural:cylinder")
+    rig.add_clip("bend", bend_poses(rig, "Bone1", 90, 9))
+    path = tmp_path_factory.mktemp("rig") / "cylinder.glb"
+    rig.save(path)
+    return path
+
+
+def test_a_rig_and_its_clips(cylinder_file):
+    rig = skinning.load(cylinder_file)
+    assert rig.joints == ["Bone0", "Bone1"] and rig.parents == [-1, 0]
+    assert rig.clips == ["bend"]
+    assert rig.rest.shape[1] == 3 and rig.triangles.shape[1] == 3
+    poses = rig.clip_poses("bend")
+    assert poses.shape == (9, 2, 4, 4)
+    assert np.allclose(poses[0], rig.rest_pose(), atol=1e-6)
+    assert rig.summary()["clips"] == [("bend", 9, 30.0)]
+
+
+def test_bakes_with_every_method_give_frames_and_metrics(cylinder_file):
+    rig = skinning.load(cylinder_file)
+    stages = []
+    skinner = skinning.Skinner(rig, progress=lambda stage, done, total: stages.append(stage))
+    assert stages
+    for method in ("lbs", "dqs", "implicit2013", "tracking2014"):
+        result = skinner.bake(method, clip="bend", self_intersections=False)
+        assert result.method == method
+        frames = result.frames
+        assert frames.shape == (9, len(rig.rest), 3) and frames.dtype == np.float32
+        assert np.abs(frames[0] - rig.rest).max() < 1e-3
+        m = result.metrics()
+        assert method in m["methods"] and len(m["methods"][method]["frames"]) == 9
+    # poses from NumPy and bends give the same kind of result
+    result = skinner.bake("dqs", poses=bend_poses(rig, "Bone1", 45, 4))
+    assert result.frames.shape[0] == 4
+    result = skinner.bake("dqs", bends=["Bone1:x:60"], frames=5)
+    assert result.frames.shape[0] == 5
+
+
+@pytest.mark.skipif(not CLI, reason="isokit-skin not built")
+@pytest.mark.parametrize("method", ["dqs", "tracking2014"])
+def test_a_python_bake_equals_the_cli_bake_bit_for_bit(cylinder_file, tmp_path, method):
+    cli_pc2 = tmp_path / "cli.pc2"
+    subprocess.run(
+        [CLI, "bake", str(cylinder_file), "--clip", "bend", "--method", method, "--pc2", str(cli_pc2), "--out",
+         str(tmp_path / "cli.glb")],
+        check=True,
+        capture_output=True,
+    )
+    rig = skinning.load(cylinder_file)
+    result = skinning.Skinner(rig).bake(method, clip="bend")
+    result.write_pc2(tmp_path / "py.pc2")
+    assert (tmp_path / "py.pc2").read_bytes() == cli_pc2.read_bytes()
+    result.write_glb(tmp_path / "py.glb")
+    assert (tmp_path / "py.glb").read_bytes() == (tmp_path / "cli.glb").read_bytes()
+
+
+def test_errors_are_input_errors_with_the_cli_messages(tmp_path):
+    with pytest.raises(isokit.InputError, match="does not exist"):
+        skinning.load(tmp_path / "missing.glb")
+    rig = skinning.load("procedural:cylinder")
+    skinner = skinning.Skinner(rig)
+    with pytest.raises(isokit.InputError, match="lbs, dqs"):
+        skinner.bake("magic", bends=["Bone1:x:30"])
+    with pytest.raises(isokit.InputError, match="argument 'poses'"):
+        skinner.bake("dqs", poses=np.zeros((3, 5, 4, 4)))
+    with pytest.raises(isokit.InputError):
+        skinner.bake("dqs", clip="none")
