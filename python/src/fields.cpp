@@ -2,6 +2,7 @@
 // isokit.fields: analytic primitives, HRBFs fitted to points and normals, grids, and composition
 // trees of them with isokit's operators, evaluated (value and gradient) on (N, 3) arrays.
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <memory>
@@ -59,27 +60,40 @@ float positive(double x, const char* name) {
 }
 
 /// values (N,), gradients (N, 3) of `field` at `points` (N, 3); the GIL is released meanwhile.
+/// The field writes straight into one (N, 4) buffer (FieldSample's layout: value, gradient); the
+/// two results are views of it, so nothing is copied on the way out.
 py::tuple evaluate(const Field& field, const py::object& points_obj) {
+  static_assert(sizeof(Vec3f) == 3 * sizeof(float), "Vec3f must be three packed floats");
+  static_assert(sizeof(FieldSample) == 4 * sizeof(float), "FieldSample must be four packed floats");
   const auto points = real_array<float>(points_obj, "points", {-1, 3});
   const auto n = static_cast<std::size_t>(points.shape(0));
-  py::array_t<float> values(static_cast<py::ssize_t>(n));
-  py::array_t<float> gradients({static_cast<py::ssize_t>(n), py::ssize_t{3}});
+  py::array_t<float> samples({static_cast<py::ssize_t>(n), py::ssize_t{4}});
   const float* p = points.data();
-  float* v = values.mutable_data();
-  float* g = gradients.mutable_data();
+  float* out = samples.mutable_data();
   {
     py::gil_scoped_release release;
-    std::vector<FieldSample> out(n);
-    static_assert(sizeof(Vec3f) == 3 * sizeof(float), "Vec3f must be three packed floats");
-    field.eval_batch(reinterpret_cast<const Vec3f*>(p), n, out.data());
-    for (std::size_t i = 0; i < n; ++i) {
-      v[i] = out[i].value;
-      g[3 * i] = out[i].gradient.x;
-      g[3 * i + 1] = out[i].gradient.y;
-      g[3 * i + 2] = out[i].gradient.z;
-    }
+    field.eval_batch(reinterpret_cast<const Vec3f*>(p), n, reinterpret_cast<FieldSample*>(out));
   }
-  return py::make_tuple(values, gradients);
+  return py::make_tuple(
+      samples[py::make_tuple(py::slice(0, static_cast<py::ssize_t>(n), 1), 0)],
+      samples[py::make_tuple(py::slice(0, static_cast<py::ssize_t>(n), 1), py::slice(1, 4, 1))]);
+}
+
+/// Seconds of the C++ call `evaluate` wraps (eval_batch into a FieldSample buffer), best of
+/// `repeats`: the reference of the Python overhead benchmark (bench/python/bench_python.py).
+double cpp_eval_seconds(const Field& field, const py::object& points_obj, int repeats) {
+  const auto points = real_array<float>(points_obj, "points", {-1, 3});
+  const auto n = static_cast<std::size_t>(points.shape(0));
+  const auto* p = reinterpret_cast<const Vec3f*>(points.data());
+  double best = 1e300;
+  py::gil_scoped_release release;
+  std::vector<FieldSample> out(n);
+  for (int r = 0; r < repeats; ++r) {
+    const auto t0 = std::chrono::steady_clock::now();
+    field.eval_batch(p, n, out.data());
+    best = std::min(best, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  }
+  return best;
 }
 
 /// An HRBF through `points` with `normals` (outward), remapped by t_r with width `r` (default:
@@ -204,6 +218,13 @@ void bind_fields(py::module_& m) {
           "evaluate",
           [](const PyField& f, const py::object& points) { return evaluate(f.evaluator(), points); },
           py::arg("points"), "(values (N,), gradients (N, 3)) at points (N, 3); float32.")
+      .def(
+          "_cpp_eval_seconds",
+          [](const PyField& f, const py::object& points, int repeats) {
+            return cpp_eval_seconds(f.evaluator(), points, repeats);
+          },
+          py::arg("points"), py::arg("repeats") = 5,
+          "Benchmark reference: the C++ call alone (best of repeats).")
       .def_property_readonly("support",
                              [](const PyField& f) {
                                const Box3f b = f.evaluator().support();

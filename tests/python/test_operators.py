@@ -160,3 +160,17 @@ def test_generate_releases_the_gil():
     done.set()
     t.join()
     assert len(ticks) > 1
+
+
+def test_ctrl_c_interrupts_a_long_call():
+    import os
+    import signal
+
+    def press_ctrl_c(done, total):
+        if done == 1:
+            os.kill(os.getpid(), signal.SIGINT)
+
+    with pytest.raises(KeyboardInterrupt):
+        ops.generate(small_spec(resolution=32), progress=press_ctrl_c)
+    # The module still works afterwards.
+    assert ops.generate(small_spec()).shape == (8, 16, 16)
