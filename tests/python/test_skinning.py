@@ -58,6 +58,16 @@ def test_bakes_with_every_method_give_frames_and_metrics(cylinder_file):
         assert np.abs(frames[0] - rig.rest).max() < 1e-3
         m = result.metrics()
         assert method in m["methods"] and len(m["methods"][method]["frames"]) == 9
+    # the bake reports each frame; an exception in the callback stops it
+    seen = []
+    skinner.bake("dqs", clip="bend", progress=lambda stage, done, total: seen.append((stage, done, total)))
+    assert seen[-1] == ("bake dqs", 9, 9)
+
+    def stop(stage, done, total):
+        raise RuntimeError("stop the bake")
+
+    with pytest.raises(RuntimeError, match="stop the bake"):
+        skinner.bake("tracking2014", clip="bend", progress=stop)
     # poses from NumPy and bends give the same kind of result
     result = skinner.bake("dqs", poses=bend_poses(rig, "Bone1", 45, 4))
     assert result.frames.shape[0] == 4
