@@ -22,6 +22,7 @@ packages=(
   catch2 libbenchmark-dev                 # tests, benchmarks
   python3-dev pybind11-dev                # the Python module (docs/python.md)
   python3-numpy python3-pytest python3-matplotlib  # its arrays, tests and docs examples
+  python3-distributed                     # isokit-batch on a Dask cluster (docs/batch.md)
 )
 
 missing=()

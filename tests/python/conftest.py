@@ -9,3 +9,8 @@ import pytest
 def source_dir():
     """tests/ of the source tree (test data)."""
     return os.environ.get("ISOKIT_TEST_SOURCE_DIR", os.path.dirname(os.path.dirname(__file__)))
+
+
+def pytest_configure(config):
+    # Debian's tornado 6.2 under distributed 2022.12 warns about its own event-loop setup.
+    config.addinivalue_line("filterwarnings", "ignore:make_current is deprecated:DeprecationWarning")
