@@ -143,9 +143,73 @@ py::dict rig_summary(const Rig& rig) {
 
 }  // namespace
 
+/// A rig from arrays (a DCC's mesh and armature): joints parents first, their world transforms at
+/// the bind pose, dense weights (V, J) normalised per vertex.
+std::shared_ptr<Rig> rig_from_arrays(const py::object& vertices, const py::object& triangles,
+                                     const std::vector<std::string>& joints, const std::vector<int>& parents,
+                                     const py::object& bind_world, const py::object& weights,
+                                     const std::string& name) {
+  auto rig = std::make_shared<Rig>();
+  rig->name = name;
+  const auto v = real_array<float>(vertices, "vertices", {-1, 3});
+  rig->rest.resize(v.shape(0), 3);
+  if (v.size() > 0)
+    std::memcpy(rig->rest.data(), v.data(), static_cast<std::size_t>(v.size()) * sizeof(float));
+  const auto t = real_array<int>(triangles, "triangles", {-1, 3});
+  rig->triangles.resize(t.shape(0), 3);
+  if (t.size() > 0)
+    std::memcpy(rig->triangles.data(), t.data(), static_cast<std::size_t>(t.size()) * sizeof(int));
+  const auto nj = static_cast<py::ssize_t>(joints.size());
+  require(
+      parents.size() == joints.size(), "argument 'parents'",
+      "has " + std::to_string(parents.size()) + " entries for " + std::to_string(joints.size()) + " joints",
+      "give one parent index per joint (-1 for a root)");
+  const auto world = real_array<double>(bind_world, "bind_world", {nj, 4, 4});
+  std::vector<Affine> w(joints.size());
+  for (std::size_t j = 0; j < joints.size(); ++j) {
+    Eigen::Matrix4d m;
+    for (int r = 0; r < 4; ++r)
+      for (int c = 0; c < 4; ++c) m(r, c) = world.data()[16 * j + static_cast<std::size_t>(4 * r + c)];
+    w[j].matrix() = m;
+    w[j].matrix().row(3) << 0, 0, 0, 1;
+  }
+  for (std::size_t j = 0; j < joints.size(); ++j) {
+    const int p = parents[j];
+    require(p < static_cast<int>(j), "argument 'parents'",
+            "joint " + std::to_string(j) + " ('" + joints[j] + "') has parent " + std::to_string(p) +
+                ", not an earlier joint",
+            "order the joints parents first");
+    const Affine local = p < 0 ? w[j] : Affine(w[static_cast<std::size_t>(p)].inverse(Eigen::Affine) * w[j]);
+    rig->joints.emplace_back(joints[j], p, local, w[j].inverse(Eigen::Affine));
+  }
+  const auto wt = real_array<float>(weights, "weights", {rig->rest.rows(), nj});
+  SkinWeights sw;
+  sw.offsets.push_back(0);
+  for (py::ssize_t i = 0; i < wt.shape(0); ++i) {
+    for (py::ssize_t j = 0; j < nj; ++j) {
+      const float x = wt.data()[i * nj + j];
+      if (x != 0) {
+        sw.joints.push_back(static_cast<int>(j));
+        sw.weights.push_back(x);
+      }
+    }
+    sw.offsets.push_back(static_cast<int>(sw.joints.size()));
+  }
+  normalize_weights(sw, static_cast<int>(rig->rest.rows()), 0.0f, name);
+  rig->weights = std::move(sw);
+  validate(*rig);
+  return rig;
+}
+
 void bind_skinning(py::module_& m) {
   py::class_<Rig, std::shared_ptr<Rig>>(m, "Rig",
                                         "A rigged character: welded rest mesh, joints, weights, clips.")
+      .def_static(
+          "from_arrays", &rig_from_arrays, py::arg("vertices"), py::arg("triangles"), py::arg("joints"),
+          py::arg("parents"), py::arg("bind_world"), py::arg("weights"), py::arg("name") = "arrays",
+          "A rig from arrays: vertices (V, 3), triangles (F, 3), joint names parents first, parent "
+          "indices (-1: root), each joint's world transform at the bind pose (J, 4, 4), weights (V, J) "
+          "(normalised per vertex). For meshes and armatures from other tools (a DCC, NumPy).")
       .def_property_readonly("name", [](const Rig& r) { return r.name; })
       .def_property_readonly(
           "rest", [](const Rig& r) { return positions_array(r.rest); },

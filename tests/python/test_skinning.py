@@ -104,3 +104,26 @@ def test_errors_are_input_errors_with_the_cli_messages(tmp_path):
         skinner.bake("dqs", poses=np.zeros((3, 5, 4, 4)))
     with pytest.raises(isokit.InputError):
         skinner.bake("dqs", clip="none")
+
+
+def test_a_rig_from_arrays_skins_as_the_same_rig_loaded_from_a_file(cylinder_file):
+    loaded = skinning.load(cylinder_file)
+    # The cylinder's bind pose: Bone0 at the origin, Bone1 one unit up (procedural.h).
+    world = np.repeat(np.eye(4)[None], 2, axis=0)
+    world[1, 1, 3] = 1.0
+    rest_local = loaded.rest_pose()
+    assert np.allclose(world[1], rest_local[0] @ rest_local[1])
+    weights = np.zeros((len(loaded.rest), 2), np.float32)
+    y = loaded.rest[:, 1]
+    weights[:, 1] = np.clip((y - 0.8) / 0.4, 0, 1)
+    weights[:, 0] = 1 - weights[:, 1]
+    rig = skinning.Rig.from_arrays(loaded.rest, loaded.triangles, ["Bone0", "Bone1"], [-1, 0], world, weights)
+    assert rig.joints == ["Bone0", "Bone1"] and np.allclose(rig.rest_pose(), rest_local, atol=1e-6)
+    frames = skinning.Skinner(rig).bake("dqs", bends=["Bone1:x:90"], frames=3).frames
+    top = y > 1.5
+    # The top ring turned 90 degrees about x around (0, 1, 0): y - 1 -> -(z), z -> y - 1.
+    assert np.allclose(frames[1][top, 1] - 1, -loaded.rest[top, 2], atol=1e-4)
+    with pytest.raises(isokit.InputError, match="parents first"):
+        skinning.Rig.from_arrays(loaded.rest, loaded.triangles, ["A", "B"], [1, -1], world, weights)
+    with pytest.raises(isokit.InputError, match="argument 'weights'"):
+        skinning.Rig.from_arrays(loaded.rest, loaded.triangles, ["A", "B"], [-1, 0], world, weights[:, :1])
