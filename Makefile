@@ -12,7 +12,7 @@ EVAL_ARGS  ?=
 JOBS       ?= $(shell nproc)
 CMAKE_ARGS ?=
 
-.PHONY: all deps configure build demo eval test test-release test-asan bench bench-studio fuzz clean
+.PHONY: all deps configure build demo eval test test-release test-asan bench bench-studio fuzz blender-addon clean
 
 all: build
 
@@ -87,6 +87,12 @@ fuzz: deps
 	cmake --build $(FUZZ_BUILD) -j $(JOBS) --target isokit_fuzz_all
 	rm -rf $(FUZZ_BUILD)/seeds && $(FUZZ_BUILD)/fuzz/isokit_fuzz_seeds $(FUZZ_BUILD)/seeds
 	ISOKIT_FUZZ_ISOLATE=$(FUZZ_ISOLATE) scripts/run-fuzz.sh $(FUZZ_BUILD) $(FUZZ_SECONDS) $(FUZZ_TARGETS)
+
+# The Blender add-on as a zip for Edit > Preferences > Add-ons > Install (docs/blender.md).
+blender-addon:
+	@mkdir -p $(BUILD)
+	cd apps/blender && python3 -m zipfile -c ../../$(BUILD)/isokit_blender.zip isokit_blender
+	@echo "wrote $(BUILD)/isokit_blender.zip"
 
 clean:
 	rm -rf $(BUILD) $(ASAN_BUILD) $(FUZZ_BUILD) out demo-out
