@@ -33,8 +33,9 @@ def check(ok, what):
         FAILURES.append(what)
 
 
-def build_scene(frames=25, bend_deg=120.0):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+def build_scene(frames=25, bend_deg=120.0, reset=True):
+    if reset:
+        bpy.ops.wm.read_factory_settings(use_empty=True)
     scene = bpy.context.scene
     scene.render.fps = 30
     scene.frame_start, scene.frame_end = 1, frames
@@ -65,14 +66,16 @@ def build_scene(frames=25, bend_deg=120.0):
     arm = bpy.data.objects.new("rig", arm_data)
     scene.collection.objects.link(arm)
     bpy.context.view_layer.objects.active = arm
-    bpy.ops.object.mode_set(mode="EDIT")
+    with bpy.context.temp_override(active_object=arm, object=arm):
+        bpy.ops.object.mode_set(mode="EDIT")
     lower = arm_data.edit_bones.new("lower")
     lower.head, lower.tail = (0, 0, 0), (0, 0, 1)
     upper = arm_data.edit_bones.new("upper")
     upper.head, upper.tail = (0, 0, 1), (0, 0, 2)
     upper.parent = lower
     upper.use_connect = True
-    bpy.ops.object.mode_set(mode="OBJECT")
+    with bpy.context.temp_override(active_object=arm, object=arm):
+        bpy.ops.object.mode_set(mode="OBJECT")
     # Both objects away from the origin, the same way (the armature's object transform is used).
     for o in (obj, arm):
         o.location = (1.0, 2.0, 0.5)

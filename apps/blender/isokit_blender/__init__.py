@@ -1,7 +1,8 @@
 # SPDX-License-Identifier: MIT
 """isokit for Blender: bake implicit skinning (isokit) on an armature-deformed mesh.
 
-A panel in the 3D view's sidebar (N, tab "isokit") on a mesh deformed by an armature: method,
+A panel in the 3D view's sidebar (N, tab "isokit") and in the mesh's Object Data properties, on
+a mesh deformed by an armature: method,
 setup file, frame range, output (a point cache played by a Mesh Cache modifier, or shape keys)
 and "Bake". Every mesh deformed by the same armature bakes with it. docs/blender.md.
 """
@@ -254,7 +255,19 @@ class ISOKIT_PT_panel(bpy.types.Panel):
         layout.operator(ISOKIT_OT_bake.bl_idname, icon="MOD_ARMATURE")
 
 
-_CLASSES = (IsokitSettings, ISOKIT_OT_bake, ISOKIT_PT_panel)
+class ISOKIT_PT_data_panel(bpy.types.Panel):
+    """The same panel in the Properties editor, Object Data tab of the mesh."""
+
+    bl_label = "isokit skinning"
+    bl_space_type = "PROPERTIES"
+    bl_region_type = "WINDOW"
+    bl_context = "data"
+    bl_order = -1  # above the mesh's own panels
+    poll = ISOKIT_PT_panel.poll
+    draw = ISOKIT_PT_panel.draw
+
+
+_CLASSES = (IsokitSettings, ISOKIT_OT_bake, ISOKIT_PT_panel, ISOKIT_PT_data_panel)
 
 
 def register():
