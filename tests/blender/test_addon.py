@@ -205,6 +205,33 @@ def main():
                 m.show_viewport = m.show_render = True
         obj.modifiers.remove(obj.modifiers["isokit"])
 
+    # Several meshes on one armature bake together: a ring around the lower bone, weighted to it.
+    ring = bpy.data.meshes.new("ring")
+    rv = [(0.4 * math.cos(2 * math.pi * j / 12), 0.4 * math.sin(2 * math.pi * j / 12), z) for z in (0.3, 0.5)
+          for j in range(12)]
+    rf = [(j, (j + 1) % 12, 12 + (j + 1) % 12, 12 + j) for j in range(12)]
+    ring.from_pydata(rv, [], rf)
+    ring_obj = bpy.data.objects.new("ring", ring)
+    scene.collection.objects.link(ring_obj)
+    ring_obj.matrix_world = obj.matrix_world.copy()
+    ring_obj.vertex_groups.new(name="lower").add(list(range(24)), 1.0, "REPLACE")
+    ring_obj.modifiers.new("Armature", "ARMATURE").object = arm
+    bpy.context.view_layer.update()
+    scene.isokit.method = "dqs"
+    check(bpy.ops.isokit.bake() == {"FINISHED"}, "two meshes: the operator finished")
+    for o in (obj, ring_obj):
+        mod = o.modifiers.get("isokit")
+        check(mod is not None and mod.type == "MESH_CACHE", f"two meshes: {o.name} has its Mesh Cache")
+    ring_pc2 = read_pc2(os.path.join(isokit_blender.cache_folder(), "ring.pc2"))
+    check(ring_pc2.shape == (25, 24, 3) and np.abs(ring_pc2[24] - ring_pc2[0]).max() < 1e-5,
+          "two meshes: the ring, on the unmoved lower bone, stays in place")
+    for o in (obj, ring_obj):
+        for m in o.modifiers:
+            if m.type == "ARMATURE":
+                m.show_viewport = m.show_render = True
+        o.modifiers.remove(o.modifiers["isokit"])
+    bpy.data.objects.remove(ring_obj)
+
     # Shape keys, and an error reported in one line.
     scene.isokit.method = "dqs"
     scene.isokit.output = "SHAPE_KEYS"
