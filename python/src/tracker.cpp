@@ -192,9 +192,12 @@ class PyTracker {
       tracker_ = std::make_unique<IsoSurfaceTracker>(rest_, triangles_, iso_, o);
       python_field_ = python_field;
     }
+    // The mask of this call (none: every vertex relaxes), not one left by an earlier call.
     if (!mask.is_none()) {
       const auto m = real_array<float>(mask, "mask", {rest_.rows()});
       tracker_->set_relaxation_mask(std::vector<float>(m.data(), m.data() + m.size()));
+    } else {
+      tracker_->set_relaxation_mask(std::vector<float>(static_cast<std::size_t>(rest_.rows()), 1.0f));
     }
     Released released;
     PythonFieldCost cost;

@@ -117,3 +117,20 @@ def test_bad_arrays_and_options_give_one_line_errors():
         t.track(fields.sphere([0, 0, 0], 1), rest[:-1])
     with pytest.raises(isokit.InputError, match="argument 'rotations'"):
         t.track(fields.sphere([0, 0, 0], 1), rest, rotations=np.zeros((3, 3)))
+
+
+def test_the_mask_holds_masked_vertices_in_their_tangent_plane_and_applies_per_call():
+    rest, tris = uv_sphere()
+    t = tracker.Tracker(rest, tris, np.full(len(rest), 0.5, np.float32))
+    # Rotations that would slide every vertex around z; mask 0 keeps the tangential moves off.
+    a = 0.3
+    rz = np.array([[np.cos(a), -np.sin(a), 0], [np.sin(a), np.cos(a), 0], [0, 0, 1]], np.float32)
+    rotations = np.repeat(rz[None], len(rest), axis=0)
+    still, _ = t.track(ball(1.0), rest, rotations=rotations, mask=np.zeros(len(rest)))
+    assert np.abs(still - rest).max() < 1e-4  # on the iso-surface already, nothing to do
+    moved, _ = t.track(ball(1.0), rest, rotations=rotations)  # no mask this call: they slide round z
+    assert np.abs(moved - rest).max() > 1e-2
+    with pytest.raises(isokit.InputError, match="argument 'mask'"):
+        t.track(ball(1.0), rest, mask=np.zeros(3))
+    with pytest.raises(isokit.InputError):
+        t.track(ball(1.0), rest, mask=np.full(len(rest), 2.0))
