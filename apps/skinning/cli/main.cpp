@@ -23,6 +23,7 @@
 #include "isokit/skinning/fit_quality.h"
 #include "isokit/skinning/grid_operators.h"
 #include "isokit/skinning/procedural.h"
+#include "isokit/skinning/rigid_pieces.h"
 
 using namespace isokit::skinning;
 using isokit::format_number;
@@ -56,6 +57,25 @@ void print_surface(const Rig& rig) {
       closed ? (s.volume >= 0 ? "closed, oriented outward" : "closed, inside out") : "not closed");
 }
 
+/// The rigid pieces (rigid_pieces.h): components that follow one transform.
+void print_rigid_pieces(const Rig& rig) {
+  const std::vector<RigidPiece> pieces = find_rigid_pieces(rig);
+  std::size_t vertices = 0;
+  for (const RigidPiece& p : pieces) vertices += p.vertices.size();
+  std::printf("rigid pieces: %zu (%zu of %lld vertices)\n", pieces.size(), vertices,
+              static_cast<long long>(rig.rest.rows()));
+  for (std::size_t k = 0; k < pieces.size() && k < 40; ++k) {
+    const RigidPiece& p = pieces[k];
+    std::string on;
+    for (std::size_t i = 0; i < p.joints.size(); ++i)
+      on += (i ? " + " : "") + rig.joints[static_cast<std::size_t>(p.joints[i])].display_name() +
+            (p.joints.size() > 1 ? " " + format_number(p.weights[i]) : "");
+    std::printf("  %3zu  %6zu vertices %6d triangles  on %s\n", k, p.vertices.size(), p.triangles,
+                on.c_str());
+  }
+  if (pieces.size() > 40) std::printf("  ... (%zu more)\n", pieces.size() - 40);
+}
+
 void print_info(const Rig& rig, const std::string& spec) {
   std::printf("rig: %s\n", spec.c_str());
   std::printf(
@@ -71,6 +91,7 @@ void print_info(const Rig& rig, const std::string& spec) {
   if (rig.rest.rows() > 0) mean_w /= double(rig.rest.rows());
   std::printf("weights per vertex: mean %.2f, max %d\n", mean_w, max_w);
   print_surface(rig);
+  print_rigid_pieces(rig);
   std::printf("joints: %zu\n", rig.joints.size());
   const std::vector<Eigen::Vector3d> p = rest_joint_positions(rig);
   for (std::size_t j = 0; j < rig.joints.size(); ++j) {
