@@ -1,7 +1,11 @@
 // SPDX-License-Identifier: MIT
 #include <catch2/catch.hpp>
 
+#include <algorithm>
+
 #include "isokit/core/error.h"
+#include "isokit/skinning/animation.h"
+#include "isokit/skinning/pipeline.h"
 #include "isokit/skinning/procedural.h"
 #include "isokit/skinning/rigid_pieces.h"
 
@@ -11,7 +15,8 @@ namespace {
 
 /// `rig` plus a closed tetrahedron at `at` whose four vertices have the influences `inf` (one
 /// list of (joint, weight) per vertex).
-void add_tetrahedron(Rig& rig, const Eigen::Vector3f& at, const std::vector<std::vector<std::pair<int, float>>>& inf) {
+void add_tetrahedron(Rig& rig, const Eigen::Vector3f& at,
+                     const std::vector<std::vector<std::pair<int, float>>>& inf) {
   const auto base = static_cast<int>(rig.rest.rows());
   rig.rest.conservativeResize(base + 4, 3);
   rig.rest.row(base) = at.transpose();
@@ -47,11 +52,12 @@ TEST_CASE("rigid pieces: components that follow one transform, not a rigidly wei
   add_tetrahedron(rig, {3, 0, 0},
                   {{{0, .2f}, {1, .8f}}, {{1, .8f}, {0, .2f}}, {{0, .2f}, {1, .8f}}, {{0, .2f}, {1, .8f}}});
   add_tetrahedron(rig, {4, 0, 0}, {{{0, 1.f}}, {{1, 1.f}}, {{1, 1.f}}, {{1, 1.f}}});
-  add_tetrahedron(rig, {5, 0, 0}, {{{0, .2f}, {1, .8f}}, {{0, .3f}, {1, .7f}}, {{0, .2f}, {1, .8f}}, {{0, .2f}, {1, .8f}}});
+  add_tetrahedron(rig, {5, 0, 0},
+                  {{{0, .2f}, {1, .8f}}, {{0, .3f}, {1, .7f}}, {{0, .2f}, {1, .8f}}, {{0, .2f}, {1, .8f}}});
   const std::vector<RigidPiece> pieces = find_rigid_pieces(rig);
   REQUIRE(pieces.size() == 2);
-  CHECK(pieces[0].vertices == std::vector<int>{int(skin_vertices), int(skin_vertices) + 1, int(skin_vertices) + 2,
-                                               int(skin_vertices) + 3});
+  CHECK(pieces[0].vertices == std::vector<int>{int(skin_vertices), int(skin_vertices) + 1,
+                                               int(skin_vertices) + 2, int(skin_vertices) + 3});
   CHECK(pieces[0].joints == std::vector<int>{1});
   CHECK(pieces[0].triangles == 4);
   CHECK(pieces[1].joints == std::vector<int>{0, 1});  // sorted, whatever the order in the weights
@@ -63,4 +69,43 @@ TEST_CASE("rigid pieces: components that follow one transform, not a rigidly wei
   // Without weights there is nothing to tell.
   rig.weights = SkinWeights{};
   CHECK(find_rigid_pieces(rig).empty());
+}
+
+TEST_CASE(
+    "rigid pieces: with tracker.rigid_pieces they move exactly with their bone, the skin is still tracked",
+    "[skinning][rigid][unit]") {
+  Rig rig = make_cylinder();
+  const auto skin_vertices = rig.rest.rows();
+  // A prop on Bone1 straddling the skin by the joint, where the composed field differs from the
+  // bone's transform: the tracker would move it.
+  add_tetrahedron(rig, {0.25f, 1.05f, 0.f}, {{{1, 1.f}}, {{1, 1.f}}, {{1, 1.f}}, {{1, 1.f}}});
+  const std::vector<Pose> poses = bend_animation(rig, {parse_bend("Bone1:x:60", rig)}, 5);
+  const double diag = (rig.rest.colwise().maxCoeff() - rig.rest.colwise().minCoeff()).cast<double>().norm();
+  BakeOptions quick;
+  quick.self_intersections = false;
+  const BakeResult dqs = Skinner(rig).bake(Method::kDqs, poses, quick);
+  for (const bool rigid : {false, true}) {
+    SkinSetup setup;
+    setup.rigid_pieces = rigid;
+    Skinner sk(rig, setup);
+    for (const Method m : {Method::kTracking2014, Method::kImplicit2013}) {
+      const BakeResult r = sk.bake(m, poses, quick);
+      double prop = 0, skin = 0;
+      for (std::size_t f = 0; f < poses.size(); ++f) {
+        prop = std::max(
+            prop, double((r.frames[f].bottomRows(4) - dqs.frames[f].bottomRows(4)).cwiseAbs().maxCoeff()));
+        skin =
+            std::max(skin, double((r.frames[f].topRows(skin_vertices) - dqs.frames[f].topRows(skin_vertices))
+                                      .cwiseAbs()
+                                      .maxCoeff()));
+      }
+      INFO(to_string(m) << (rigid ? " with" : " without") << " rigid pieces: prop " << prop / diag
+                        << ", skin " << skin / diag);
+      if (rigid)
+        CHECK(prop <= 1e-6 * diag);  // exactly its bone's transform
+      else
+        CHECK(prop > 1e-4 * diag);  // projected onto the field like skin
+      CHECK(skin > 1e-4 * diag);    // the skin is tracked, not skinned
+    }
+  }
 }

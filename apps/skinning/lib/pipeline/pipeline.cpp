@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: MIT
 #include "isokit/skinning/pipeline.h"
+#include "isokit/skinning/rigid_pieces.h"
 
 #include <algorithm>
 #include <chrono>
@@ -170,7 +171,13 @@ struct BakeState {
   track::Positions current;                           ///< tracking2014: the last result
   Pose previous;                                      ///< tracking2014: the last frame's pose
   std::vector<Affine> prev_skin;                      ///< tracking2014: the last sub-step's matrices
+  std::vector<int> rigid;  ///< vertices of the rigid pieces (SkinSetup::rigid_pieces), else empty
 };
+
+/// The rigid pieces' vertices take their skinned positions `skinned` (their one transform).
+void place_rigid(const std::vector<int>& rigid, const track::Positions& skinned, track::Positions& pos) {
+  for (int v : rigid) pos.row(v) = skinned.row(v);
+}
 
 void check_poses(const Rig& rig, const std::vector<Pose>& poses) {
   require(!poses.empty(), rig.name + ": animation", "has no frames", "give a clip, --bend or a pose script");
@@ -239,6 +246,7 @@ void track_frame(const Skinner& sk, BakeState& s, const Pose& pose, std::size_t 
     if (s.guard) st.axis_guard_moves += s.guard->apply(skin, s.current);
     s.field->set_pose(skin);
     const track::TrackStats ts = s.tracker->track(s.field->function(), rotations, s.current);
+    place_rigid(s.rigid, scratch, s.current);
     ++st.tracker_calls;
     st.capped_calls += ts.converged ? 0 : 1;
     st.call_iterations.push_back(ts.iterations);
@@ -267,8 +275,10 @@ const std::vector<std::uint8_t>* deform(const Skinner& sk, Method method, BakeSt
       return nullptr;
     case Method::kImplicit2013: {
       dual_quaternion_blend(rig.weights, skin, rig.rest, pos, nullptr, grain);
+      const track::Positions skinned = s.rigid.empty() ? track::Positions{} : pos;
       s.field->set_pose(skin);
       const track::TrackStats ts = s.projector->project(s.field->function(), pos);
+      place_rigid(s.rigid, skinned, pos);
       st.tracker_calls = 1;
       st.capped_calls = ts.converged ? 0 : 1;
       st.call_iterations = {ts.iterations};
@@ -307,6 +317,18 @@ void start_bake(Skinner& sk, Method method, const BakeOptions& options, BakeStat
   s.current = rig.rest;
   s.previous = rest;
   s.prev_skin = skinning_matrices(rig, rest);
+  if (setup.rigid_pieces && (method == Method::kTracking2014 || method == Method::kImplicit2013)) {
+    for (const RigidPiece& p : find_rigid_pieces(rig))
+      s.rigid.insert(s.rigid.end(), p.vertices.begin(), p.vertices.end());
+    if (s.tracker && !s.rigid.empty()) {  // no tangential moves on them (they are put back anyway)
+      const std::vector<int>& partition = sk.fitted().partition();
+      std::vector<float> mask(static_cast<std::size_t>(rig.rest.rows()));
+      for (std::size_t v = 0; v < mask.size(); ++v)
+        mask[v] = setup.relaxation_for(rig.joints[partition[v]].name);
+      for (int v : s.rigid) mask[static_cast<std::size_t>(v)] = 0.0f;
+      s.tracker->set_relaxation_mask(std::move(mask));
+    }
+  }
 }
 
 /// A frame's metrics (Skinner::measure).

@@ -351,6 +351,7 @@ void read_tracker(const json& t, const std::string& w, SkinSetup& s) {
               "orientation_repair_max_move",
               "orientation_repair_max_outward_move",
               "axis_guard",
+              "rigid_pieces",
               "chebyshev_rho",
               "active_set",
               "min_contact_damping",
@@ -382,6 +383,7 @@ void read_tracker(const json& t, const std::string& w, SkinSetup& s) {
   read(t, "angle_contacts", s.tracker.angle_contacts, w);
   read(t, "lazy_evaluation", s.tracker.lazy_evaluation, w);
   read(t, "axis_guard", s.axis_guard, w);
+  read(t, "rigid_pieces", s.rigid_pieces, w);
   read(t, "chebyshev_rho", s.tracker.chebyshev_rho, w);
   require(std::isfinite(s.tracker.chebyshev_rho) && s.tracker.chebyshev_rho >= 0.f &&
               s.tracker.chebyshev_rho < 1.f,

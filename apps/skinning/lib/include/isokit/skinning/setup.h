@@ -148,6 +148,12 @@ struct SkinSetup {
   /// sub-step (`AxisGuard`; not in the papers; docs/skinning.md, "Decision: the axis guard").
   /// Default on; setup key `tracker.axis_guard`.
   bool axis_guard{true};
+  /// implicit2013 and tracking2014: the rig's rigid pieces (`find_rigid_pieces`: components whose
+  /// every vertex has the same influences) move with their transform exactly (their DQS
+  /// position) instead of being projected and relaxed; their fields stay in the composition, so
+  /// the skin that touches them still meets them. Not in the papers. Default off (not yet
+  /// measured on the evaluation); setup key `tracker.rigid_pieces`.
+  bool rigid_pieces{false};
   /// tracking2014: the fold repair (TrackerOptions::fold_repair) leaves alone the vertices of
   /// parts with fewer vertices than this, ≥ 0 (0: no limit): a fold repair region holds 20 – 30
   /// vertices, so smaller parts are under-resolved and smoothing would erase them. Not in the
