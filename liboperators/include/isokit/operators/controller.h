@@ -47,7 +47,7 @@ class Controller {
   /// - "contact": `d_c` of 2014 Fig. 4(a): 0 on [0, π/2] (clean union while the joint bends
   ///   like an elbow before contact), smoothstep up to 1 at π (full contact of disjoint parts).
   /// - "bulge": `d_b` of 2014 Fig. 4(b): rises from 0 at α = 0 ("the bulge starts at low bending
-  ///   angles") to 1 at π. The paper gives only the plot; why this reading: docs/operators.md,
+  ///   angles") to 1 at π. The paper gives only the plot; why this reading:
   ///   docs/decisions/the-bulge-controller.md.
   /// - "blend2013": 2013 Fig. 7(a) for the gradient-based blend, as the blend amount `d`
   ///   (θ = θ_u (1 - d) + θ_b d): union (0) at α = 0, full blend (1) at π/4, union again from
