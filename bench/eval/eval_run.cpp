@@ -262,14 +262,13 @@ void evaluate_rig(Run& run, const std::string& spec, std::size_t index, std::siz
   std::vector<EvalAnimation> animations;
   try {
     const isokit::Stage stage("loading and fitting " + spec);
-    Rig rig = open_rig(spec, run.args.fps);
+    SkinSetup setup = run.args.setup.empty() ? SkinSetup{} : load_setup(run.args.setup);
+    Rig rig = open_rig(spec, run.args.fps, {}, nullptr, setup.mask);
     animations = animations_of(rig, run.args);
     note(run, "  " + label + ": " + std::to_string(rig.rest.rows()) + " vertices, " +
                   std::to_string(rig.joints.size()) + " joints, " + std::to_string(rig.clips.size()) +
                   " clips; fitting");
-    skinner = std::make_unique<Skinner>(std::move(rig),
-                                        run.args.setup.empty() ? SkinSetup{} : load_setup(run.args.setup),
-                                        fit_progress(run, label));
+    skinner = std::make_unique<Skinner>(std::move(rig), std::move(setup), fit_progress(run, label));
   } catch (const std::exception& e) {
     const std::string why = error_text(e);
     run.rows.push_back(isokit::eval::error_row(label, "—", "—", why));

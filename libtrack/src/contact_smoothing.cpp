@@ -101,6 +101,13 @@ void smooth_contacts(TrackState& s) {
   if (o.smoothing.keep_detail) detail = rest_detail(s);
   s.stats.smoothed_vertices = contact_smoothing(s.m.adj, s.flags.contact, o.smoothing, o.grain, s.cur,
                                                 s.flags.beta, detail.empty() ? nullptr : detail.data());
+  if (!s.anchors.empty())  // pinned vertices stay at their anchors
+    for (std::size_t i = 0; i < s.n; ++i)
+      if (s.pinned(i) && s.flags.beta[i] > 0.f) {
+        s.cur[i] = s.anchors[i];
+        s.flags.beta[i] = 0.f;
+        --s.stats.smoothed_vertices;
+      }
   if (o.smoothing.smoothing_steps > 0)
     for (std::size_t i = 0; i < s.n; ++i)
       if (s.flags.beta[i] > 0.f) s.touched[i] = 1;

@@ -46,7 +46,7 @@ void mark_contacts(TrackState& s) {
   const TrackerOptions& o = s.m.options;
   // Contacts reported by the field at the last evaluation also get smoothed.
   for (std::size_t i = 0; i < s.n; ++i)
-    if (s.field_contact[i] && !s.flags.lost[i]) s.flags.contact[i] = 1;
+    if (s.field_contact[i] && !s.flags.lost[i] && !s.pinned(i)) s.flags.contact[i] = 1;
   // Folds: the vertices of a triangle that the relaxation left inverted (typically at a crease
   // where no consecutive gradients differed by the contact angle) are smoothed like contacts;
   // triangles already inverted at rest (mark_rest_inversions) are not folds.
@@ -61,7 +61,7 @@ void mark_contacts(TrackState& s) {
     const std::size_t t = static_cast<std::size_t>(f);
     if (s.inverted[t] && (rest.empty() || !rest[t]))
       for (int k = 0; k < 3; ++k)
-        if (!s.flags.lost[tris(f, k)]) s.flags.contact[tris(f, k)] = 1;
+        if (!s.flags.lost[tris(f, k)] && !s.pinned(std::size_t(tris(f, k)))) s.flags.contact[tris(f, k)] = 1;
   }
 }
 

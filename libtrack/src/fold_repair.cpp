@@ -52,7 +52,7 @@ class FoldRepair {
  private:
   bool pinned(int i) const {
     const std::vector<std::uint8_t>& movable = s_.m.repair_mask;
-    return s_.flags.lost[i] || (!movable.empty() && !movable[i]);
+    return s_.flags.lost[i] || (!movable.empty() && !movable[i]) || s_.pinned(std::size_t(i));
   }
 
   void add_faces_of(int i) {

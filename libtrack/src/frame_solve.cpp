@@ -101,7 +101,7 @@ void evaluate(TrackState& s, FrameScratch& f, const std::vector<int>& list) {
 }
 
 bool held_to_iso(const TrackState& s, std::size_t i) {
-  return !s.flags.lost[i] && !s.flags.free[i];
+  return !s.flags.lost[i] && !s.flags.free[i] && !s.pinned(i);
 }
 
 // A vertex that takes projection steps (not lost, not free, not stopped).

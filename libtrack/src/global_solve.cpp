@@ -130,7 +130,7 @@ void TangentSolver::Impl::build(const TrackState& s) {
   ndof.assign(n, 0);
   dofs = 0;
   for (std::size_t i = 0; i < n; ++i) {
-    if (!(m.mask[i] > 0.f) || m.adj.degree(static_cast<int>(i)) == 0) continue;
+    if (!(m.mask[i] > 0.f) || m.adj.degree(static_cast<int>(i)) == 0 || s.pinned(i)) continue;
     ndof[i] = m.free[i] ? 3 : 2;
     offset[i] = dofs;
     dofs += ndof[i];
@@ -197,7 +197,11 @@ void TangentSolver::Impl::assemble(const TrackState& s, const std::vector<Vec3f>
     if (nd == 0) continue;
     const double wsum = m.weight_sum[i];
     double alpha = double(eps) * wsum + wsum * (1.0 / double(m.mask[i]) - 1.0);
-    if (nd == 2 && (normals[i] == Vec3f{} || t2[i] == Vec3f{})) alpha = kHoldStiffness * wsum;
+    // The anchor's pull (set_anchor_stiffness): k / (1 - k) Σj wij ||pi + d - ai||².
+    const double ks = s.stiffness(i), pull = ks > 0 ? wsum * ks / (1.0 - ks) : 0.0;
+    alpha += pull;
+    const bool hold = nd == 2 && (normals[i] == Vec3f{} || t2[i] == Vec3f{});
+    if (hold) alpha = kHoldStiffness * wsum;
     const int* di = diag_index.data() + diag_block[i];
     double k2[4] = {0, 0, 0, 0};
     if (nd == 2 && alpha < kHoldStiffness * wsum) curvature_block(curvature[i], i, min_eigen * wsum, k2);
@@ -216,6 +220,7 @@ void TangentSolver::Impl::assemble(const TrackState& s, const std::vector<Vec3f>
         for (int b0 = 0; b0 < nj; ++b0)
           val[bi[a0 * nj + b0]] = -double(w) * double(dot(basis(i, a0), basis(j, b0)));
     }
+    if (pull > 0 && !hold) g += (s.anchors[i] - pi) * float(pull);
     for (int a0 = 0; a0 < nd; ++a0) b[offset[i] + a0] = double(dot(basis(i, a0), g));
   }
 }

@@ -20,6 +20,8 @@ struct JacobiTerms {
   const Vec3f* nrms;
   const std::uint8_t* contact;
   const std::uint8_t* free;  // free vertices: 3D steps (TrackerOptions::free_vertex_angle_deg)
+  const float* anchor_k;     // anchor stiffness (null: none)
+  const Vec3f* anchors;      // the call's anchors (null: none)
 };
 
 inline JacobiTerms jacobi_terms(const TrackState& s) {
@@ -32,6 +34,8 @@ inline JacobiTerms jacobi_terms(const TrackState& s) {
   t.nrms = s.normal.data();
   t.contact = s.flags.contact.data();
   t.free = s.flags.free.data();
+  t.anchor_k = s.m.anchor_k.empty() ? nullptr : s.m.anchor_k.data();
+  t.anchors = s.anchors.empty() ? nullptr : s.anchors.data();
   return t;
 }
 
@@ -39,19 +43,22 @@ inline JacobiTerms jacobi_terms(const TrackState& s) {
 /// mask: δ = Σ wij ((p̂j - p̂i) + ½ (Ri + Rj)(pi - pj)) / Σ wij, restricted to the current tangent
 /// plane except at contact vertices, whose gradient direction is meaningless on the contact
 /// valley (full 3D step, damped), and at free vertices, which the field does not locate (full 3D
-/// step). Summed per edge, so that p̂ = p with Ri = I gives exactly δ = 0.
+/// step). Summed per edge, so that p̂ = p with Ri = I gives exactly δ = 0. With an anchor of
+/// stiffness k (set_anchor_stiffness) the step is (1 − k) δ + k (ai − p): the Jacobi step of the
+/// energy with the pull term k / (1 − k) Σj wij ||pi − ai||².
 inline Vec3f jacobi_delta(const JacobiTerms& t, const Vec3f* cu, std::size_t i, const Vec3f& p) {
   Vec3f acc{};
   for (int k = t.off[i]; k < t.off[i + 1]; ++k) acc += ((cu[t.nb[k]] - p) + t.tg[k]) * t.w[k];
   Vec3f d = acc / t.wsum[i];
+  if (t.anchor_k && t.anchor_k[i] > 0.f) d = d * (1.f - t.anchor_k[i]) + (t.anchors[i] - p) * t.anchor_k[i];
   const Vec3f nrm = t.nrms[i];
   if (!t.contact[i] && !t.free[i]) d = d - nrm * dot(d, nrm);
   return d;
 }
 
-/// Whether vertex i takes tangential steps: mask > 0, not lost, not isolated.
+/// Whether vertex i takes tangential steps: mask > 0, not lost, not isolated, not pinned.
 inline bool relaxes(const TrackState& s, const JacobiTerms& t, std::size_t i) {
-  return s.m.mask[i] > 0.f && !s.flags.lost[i] && t.off[i] < t.off[i + 1];
+  return s.m.mask[i] > 0.f && !s.flags.lost[i] && t.off[i] < t.off[i + 1] && !s.pinned(i);
 }
 
 /// The Jacobi target of vertex i at `p` = x_k (`pv`: x_{k-1}), its step scaled by mask ×

@@ -29,6 +29,10 @@ inline Vec3f newton_step(const TrackState& s, std::size_t i, const Vec3f& g, flo
 /// radius of its last evaluation, takes the Newton step on the field linearised there and returns
 /// true; false (nothing changed) otherwise.
 inline bool linearised_newton(TrackState& s, std::size_t i, const Vec3f& p, const Vec3f& q, Vec3f* nx) {
+  if (s.pinned(i)) {  // held at its anchor
+    s.moves[i] = 0.f;
+    return true;
+  }
   const Vec3f d = q - s.eval_points[i];
   if (!(squared_norm(d) <= s.radius2[i])) return false;
   const Vec3f g = s.eval_gradients[i];
@@ -63,6 +67,11 @@ inline void newton_update(TrackState& s, std::size_t i, float f, const Vec3f& g,
   s.values[i] = f, s.field_contact[i] = fc;
   s.pending[i] = 0;
   s.lazy[i] = 0;
+  if (s.pinned(i)) {  // held at its anchor (its value is kept for the statistics)
+    nx[i] = cu[i];
+    s.moves[i] = 0.f;
+    return;
+  }
   if (s.flags.lost[i] || !std::isfinite(f) || !finite(g) || !(g2 > s.min_g2)) {
     s.flags.lost[i] = 1;
     nx[i] = cu[i];  // left in place

@@ -143,7 +143,7 @@ int OrientationRepair::repair_round(const std::vector<int>& verts) {
   int moves = 0;
   for (std::size_t a = 0; a < m; ++a) {
     const int v = verts[a];
-    if (s_.flags.lost[v] || (!movable.empty() && !movable[v]) || stuck_[v]) continue;
+    if (s_.flags.lost[v] || (!movable.empty() && !movable[v]) || stuck_[v] || s_.pinned(std::size_t(v))) continue;
     if (repair_vertex(v, vg[a])) ++moves;
   }
   return moves;
@@ -288,7 +288,7 @@ void repair_orientation(TrackState& s) {
   for (int i : oriented) s.flags.beta[static_cast<std::size_t>(i)] = 1.f;
   refresh_values(s.field, s.cur, oriented, s.m.options.grain, s.values, s.flags);
   s.stats.smoothed_vertices = count_smoothed(s);
-  vertex_stats(s.values, s.m.iso, s.flags, s.stats);
+  vertex_stats(s.values, s.m.iso, s.flags, s.stats, &s.m.anchor_k);
   s.stats.inverted_triangles = count_flags(s.inverted);
 }
 

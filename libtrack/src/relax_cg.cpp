@@ -38,6 +38,8 @@ class CgRelaxation final : public RelaxationStrategy {
         scale_[i] = s.m.mask[i] * s.damping[i];
       }
     problem_.positions = s.cur.data();
+    problem_.anchor_k = s.m.anchor_k.empty() ? nullptr : s.m.anchor_k.data();
+    problem_.anchors = s.anchors.empty() ? nullptr : s.anchors.data();
     s.stats.solver_iterations += solve_tangential_cg(problem_, unknowns_, local_, d_);
     for (std::size_t a = 0; a < unknowns_.size(); ++a) s.disp[std::size_t(unknowns_[a])] = d_[a];
   }

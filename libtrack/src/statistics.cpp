@@ -14,7 +14,7 @@ namespace isokit::track {
 namespace detail {
 
 void vertex_stats(const std::vector<float>& values, const std::vector<float>& iso, const VertexFlags& flags,
-                  TrackStats& stats) {
+                  TrackStats& stats, const std::vector<float>* stiffness) {
   double sum = 0;
   long count = 0;
   float mx = 0.f;
@@ -29,6 +29,7 @@ void vertex_stats(const std::vector<float>& values, const std::vector<float>& is
     stats.free_vertices += free ? 1 : 0;
     if (free || flags.contact[i] || flags.lost[i] || flags.beta[i] > 0.f || !std::isfinite(values[i]))
       continue;
+    if (stiffness && !stiffness->empty() && (*stiffness)[i] >= 1.f) continue;  // pinned
     const float r = std::abs(values[i] - iso[i]);
     mx = std::max(mx, r);
     sum += r;
@@ -86,7 +87,7 @@ void collect_statistics(TrackState& s) {
   for (std::size_t f = 0; f < tri_redo.size(); ++f)
     if (tri_redo[f]) tris.push_back(static_cast<int>(f));
   test_inverted(s.field, s.cur, s.m.triangles, tris, s.m.options.grain, s.inverted);
-  vertex_stats(s.values, s.m.iso, s.flags, s.stats);
+  vertex_stats(s.values, s.m.iso, s.flags, s.stats, &s.m.anchor_k);
   s.stats.inverted_triangles = count_flags(s.inverted);
 }
 

@@ -12,9 +12,10 @@
 namespace isokit::track::detail {
 
 /// Contact / lost / free counts and iso residuals over the vertices with β == 0 that are neither
-/// contact, lost nor free (`flags.free` may be empty: none) and have a finite value.
+/// contact, lost nor free (`flags.free` may be empty: none), nor pinned (`stiffness` 1; null or
+/// empty: none), and have a finite value.
 void vertex_stats(const std::vector<float>& values, const std::vector<float>& iso, const VertexFlags& flags,
-                  TrackStats& stats);
+                  TrackStats& stats, const std::vector<float>* stiffness = nullptr);
 
 /// The number of flags set.
 int count_flags(const std::vector<std::uint8_t>& flags);

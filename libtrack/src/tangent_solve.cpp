@@ -41,6 +41,11 @@ int solve_tangential_cg(const TangentProblem& p, const std::vector<int>& unknown
     for (int k = off[i]; k < off[i + 1]; ++k)
       acc += ((p.positions[nb[k]] - pi) + p.targets[k]) * p.weights[k];
     diag[a] = p.weight_sums[i] / p.scale[i];
+    if (p.anchor_k && p.anchor_k[i] > 0.f) {
+      const float pull = p.weight_sums[i] * p.anchor_k[i] / (1.f - p.anchor_k[i]);
+      diag[a] += pull;
+      acc += (p.anchors[i] - pi) * pull;
+    }
     r[a] = filter(p, i, acc);
   }
   auto converged = [&] {

@@ -27,6 +27,10 @@ struct TangentProblem {
   const std::uint8_t* free3d{nullptr};
   const std::uint8_t* free_vertices{nullptr};
   const float* scale{nullptr};  ///< s_i in (0, 1]: mask × damping
+  /// Anchor stiffness k_i in [0, 1) and anchors a_i (null: none): row i gains
+  /// `Σj wij k_i / (1 − k_i) (a_i − p_i − d_i)` (IsoSurfaceTracker::set_anchor_stiffness).
+  const float* anchor_k{nullptr};
+  const Vec3f* anchors{nullptr};
   float tolerance{0};           ///< stop when every |r_i| / diag_i is below this (a Jacobi step)
   int max_iterations{100};
 };

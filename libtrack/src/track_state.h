@@ -62,6 +62,7 @@ struct TrackerModel {
   std::vector<float> weight_sum;            // per vertex
   std::vector<float> max_step;              // longest Newton step per vertex
   std::vector<float> mask;                  // relaxation mask
+  std::vector<float> anchor_k;              // anchor stiffness (empty: all 0)
   std::vector<std::uint8_t> repair_mask;    // fold / orientation repair: may move (empty: all)
   std::vector<float> lazy_r2;               // squared lazy evaluation radius bound per vertex
   float diagonal{0};                        // rest bounding-box diagonal
@@ -111,6 +112,12 @@ struct TrackState {
   std::vector<std::uint8_t> touched;        // moved after the first evaluation, or smoothed
   std::vector<std::uint8_t> linear;         // gradient turned by < kChebyshevMaxTurnDeg last time
   VertexFlags flags;                        // contact, lost, β (internal order)
+  std::vector<Vec3f> anchors;               // the call's anchors (empty: no anchor stiffness)
+
+  /// Anchor stiffness of vertex i (set_anchor_stiffness), 0 without.
+  float stiffness(std::size_t i) const { return m.anchor_k.empty() ? 0.f : m.anchor_k[i]; }
+  /// Vertex i is pinned to its anchor (stiffness 1): no move of any stage.
+  bool pinned(std::size_t i) const { return !m.anchor_k.empty() && m.anchor_k[i] >= 1.f; }
 
   // Compact per-iteration buffers of the evaluated vertices (field input and output, vertex).
   std::vector<Vec3f> batch_points, batch_gradients;

@@ -87,6 +87,23 @@ void IsoSurfaceTracker::set_relaxation_mask(std::vector<float> mask) {
   m.global.reset();  // the unknowns follow the mask
 }
 
+void IsoSurfaceTracker::set_anchor_stiffness(std::vector<float> stiffness) {
+  detail::TrackerModel& m = *model_;
+  require(stiffness.size() == m.mask.size(), "anchor stiffness",
+          "size " + std::to_string(stiffness.size()) + " differs from the vertex count " +
+              std::to_string(m.mask.size()),
+          "pass one value per vertex");
+  bool any = false;
+  for (std::size_t i = 0; i < stiffness.size(); ++i) {
+    require(stiffness[i] >= 0.f && stiffness[i] <= 1.f, "anchor stiffness vertex " + std::to_string(i),
+            "is outside [0, 1] (" + format_number(stiffness[i]) + ")", "use 0 (free) .. 1 (pinned)");
+    any = any || stiffness[i] > 0.f;
+  }
+  if (!any) stiffness.clear();
+  m.anchor_k = m.order.empty() || stiffness.empty() ? std::move(stiffness) : detail::permuted(stiffness, m.order);
+  m.global.reset();  // pinned vertices have no unknowns
+}
+
 void IsoSurfaceTracker::set_fold_repair_mask(std::vector<std::uint8_t> mask) {
   detail::TrackerModel& m = *model_;
   require(mask.empty() || mask.size() == m.mask.size(), "fold repair mask",
@@ -173,13 +190,30 @@ void finish(detail::TrackState& s, detail::TrackerModel& m, Positions& positions
 
 TrackStats IsoSurfaceTracker::track(const FieldFunction& field, const std::vector<Mat3f>& rotations,
                                     Positions& positions) {
+  return track(field, rotations, positions, positions);
+}
+
+TrackStats IsoSurfaceTracker::track(const FieldFunction& field, const std::vector<Mat3f>& rotations,
+                                    Positions& positions, const Positions& anchors) {
   const auto t0 = std::chrono::steady_clock::now();
   detail::TrackerModel& m = *model_;
   detail::validate_call(positions, m.iso.size(), field);
   detail::validate_rotations(rotations, m.iso.size());
   std::vector<Vec3f> initial = detail::to_points(positions, "initial positions");
   if (!m.order.empty()) initial = detail::permuted(initial, m.order);
+  std::vector<Vec3f> anchor;
+  if (!m.anchor_k.empty()) {
+    require(static_cast<std::size_t>(anchors.rows()) == m.iso.size(), "anchors",
+            "have " + std::to_string(anchors.rows()) + " rows, the mesh has " + std::to_string(m.iso.size()) +
+                " vertices",
+            "pass one anchor per vertex");
+    anchor = &anchors == &positions ? initial : detail::to_points(anchors, "anchors");
+    if (&anchors != &positions && !m.order.empty()) anchor = detail::permuted(anchor, m.order);
+    for (std::size_t i = 0; i < anchor.size(); ++i)
+      if (m.anchor_k[i] >= 1.f) initial[i] = anchor[i];  // pinned: placed at the anchor
+  }
   detail::TrackState s(m, field, rotations, std::move(initial));
+  s.anchors = std::move(anchor);
 
   if (m.options.relaxation == Relaxation::kGlobal) {
     detail::solve_frame(s, m.global.get());  // 1 + 2. one convergent solve (not in the papers)

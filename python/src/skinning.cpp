@@ -211,6 +211,30 @@ void bind_skinning(py::module_& m) {
           "indices (-1: root), each joint's world transform at the bind pose (J, 4, 4), weights (V, J) "
           "(normalised per vertex). For meshes and armatures from other tools (a DCC, NumPy).")
       .def_property_readonly("name", [](const Rig& r) { return r.name; })
+      .def_property(
+          "relax_mask",
+          [](const Rig& r) -> py::object {
+            if (r.relax_mask.empty()) return py::none();
+            py::array_t<float> a(static_cast<py::ssize_t>(r.relax_mask.size()));
+            std::memcpy(a.mutable_data(), r.relax_mask.data(), r.relax_mask.size() * sizeof(float));
+            return std::move(a);
+          },
+          [](Rig& r, const py::object& mask) {
+            if (mask.is_none()) {
+              r.relax_mask.clear();
+              return;
+            }
+            const auto a = real_array<float>(mask, "relax_mask", {r.rest.rows()});
+            std::vector<float> values(a.data(), a.data() + a.size());
+            for (std::size_t v = 0; v < values.size(); ++v)
+              require(values[v] >= 0.f && values[v] <= 1.f, "relax_mask[" + std::to_string(v) + "]",
+                      "is outside [0, 1] (" + format_number(values[v]) + ")", "use 0 (rigid) .. 1 (tracked)");
+            r.relax_mask = std::move(values);
+          },
+          "The painted relaxation mask (V,) float32 in [0, 1], or None (every vertex tracked): 0 = "
+          "moved rigidly with its nearest bone, 1 = tracked, between = pulled toward the rigid position "
+          "(2014 Fig. 11). Read from a glTF `_RELAX_MASK` attribute or the setup's vertex-colour set; "
+          "written by save and the baked .glb.")
       .def_property_readonly(
           "rest", [](const Rig& r) { return positions_array(r.rest); },
           "Welded rest positions (V, 3) float32.")

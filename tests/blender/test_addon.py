@@ -232,6 +232,42 @@ def main():
         o.modifiers.remove(o.modifiers["isokit"])
     bpy.data.objects.remove(ring_obj)
 
+    # The painted relaxation mask (2014 Fig. 11): a float attribute RELAX_MASK, 0 (rigid with the
+    # upper bone) on the tip, which Blender 3.4's glTF exporter writes as the custom attribute
+    # _RELAX_MASK, read back by isokit; a vertex group _RELAX_MASK reads the same; the bake holds the
+    # tip rigid.
+    n = len(obj.data.vertices)
+    rest_co = np.empty(n * 3)
+    obj.data.vertices.foreach_get("co", rest_co)
+    rest_co = rest_co.reshape(-1, 3)
+    paint = np.where(rest_co[:, 2] > 1.5, 0.0, np.where(rest_co[:, 2] > 1.3, 0.5, 1.0)).astype(np.float32)
+    attr = obj.data.attributes.new("RELAX_MASK", "FLOAT", "POINT")
+    attr.data.foreach_set("value", paint)
+    masked = core.read_rig(bpy.context, [obj], arm)
+    check(masked["mask"] is not None and np.array_equal(masked["mask"], paint), "mask: read from the attribute")
+    glb_mask = os.path.join(OUT, "masked.glb")
+    bpy.ops.object.select_all(action="SELECT")
+    bpy.ops.export_scene.gltf(filepath=glb_mask, export_format="GLB", export_animations=True, export_skins=True,
+                              export_apply=False, export_force_sampling=True, export_attributes=True)
+    back = skinning.load(glb_mask)
+    j, _ = nearest(to_gltf_axes(masked["vertices"].astype(np.float64)), back.rest.astype(np.float64))
+    check(back.relax_mask is not None and np.array_equal(back.relax_mask[j], paint),
+          "mask: the glTF exporter's custom attribute is read by isokit.skinning.load")
+    obj.data.attributes.remove(obj.data.attributes["RELAX_MASK"])
+    group = obj.vertex_groups.new(name=core.MASK_NAME)
+    for v in range(n):
+        group.add([v], float(paint[v]), "REPLACE")
+    check(np.array_equal(core.read_rig(bpy.context, [obj], arm)["mask"], paint), "mask: read from a vertex group")
+    poses = core.read_poses(scene, arm, masked["joints"], masked["parents"], range(1, 26))
+    free = core.bake(arrays, poses, "tracking2014")
+    held = core.bake(masked, poses, "tracking2014")
+    dqs = core.bake(arrays, poses, "dqs")
+    tip = paint == 0.0
+    check(np.abs(held[:, tip] - dqs[:, tip]).max() <= 1e-5 * diag,
+          "mask: vertices painted 0 move rigidly with their bone (the upper bone's DQS position)")
+    check(np.abs(held - free).max() > 1e-5 * diag, "mask: the masked bake differs from the unmasked one")
+    obj.vertex_groups.remove(group)
+
     # Shape keys, and an error reported in one line.
     scene.isokit.method = "dqs"
     scene.isokit.output = "SHAPE_KEYS"

@@ -127,3 +127,31 @@ def test_a_rig_from_arrays_skins_as_the_same_rig_loaded_from_a_file(cylinder_fil
         skinning.Rig.from_arrays(loaded.rest, loaded.triangles, ["A", "B"], [1, -1], world, weights)
     with pytest.raises(isokit.InputError, match="argument 'weights'"):
         skinning.Rig.from_arrays(loaded.rest, loaded.triangles, ["A", "B"], [-1, 0], world, weights[:, :1])
+
+
+def test_the_relaxation_mask_is_read_written_and_holds_vertices_rigid(cylinder_file, tmp_path):
+    rig = skinning.load(cylinder_file)
+    assert rig.relax_mask is None
+    tip = rig.rest[:, 1] > np.percentile(rig.rest[:, 1], 80)  # the far end, on Bone1 alone
+    mask = np.where(tip, 0.0, 1.0)  # float64: converted
+    rig.relax_mask = mask
+    assert rig.relax_mask.dtype == np.float32 and np.array_equal(rig.relax_mask, mask.astype(np.float32))
+    # A glb round trip keeps it (the glTF attribute _RELAX_MASK).
+    rig.save(tmp_path / "masked.glb")
+    back = skinning.load(tmp_path / "masked.glb")
+    assert back.relax_mask is not None and back.relax_mask.min() == 0.0 and back.relax_mask.max() == 1.0
+    held = skinning.Skinner(rig).bake("tracking2014", clip="bend", self_intersections=False).frames
+    diag = np.linalg.norm(rig.rest.max(0) - rig.rest.min(0))
+
+    def shape_change(frames):  # largest change of a distance between two tip vertices
+        p = frames[:, tip].astype(np.float64)
+        d = np.linalg.norm(p[:, :, None] - p[:, None, :], axis=-1)
+        return np.abs(d - d[0]).max()
+
+    assert shape_change(held) <= 1e-5 * diag  # moved rigidly (by its nearest bone)
+    rig.relax_mask = None
+    assert rig.relax_mask is None
+    with pytest.raises(isokit.InputError, match="relax_mask"):
+        rig.relax_mask = np.zeros(3)
+    with pytest.raises(isokit.InputError, match=r"relax_mask\[0\]"):
+        rig.relax_mask = np.full(len(rig.rest), 2.0)

@@ -933,3 +933,113 @@ TEST_CASE("rig_io: sample rigs named by ISOKIT_SAMPLE_RIGS load and skin", "[ski
     }
   }
 }
+
+namespace {
+
+// The bar with a relaxation mask that varies along it: 0 at the root end, 1 at the tip.
+Rig masked_bar() {
+  Rig rig = bar_rig();
+  const float lo = rig.rest.col(0).minCoeff(), hi = rig.rest.col(0).maxCoeff();
+  rig.relax_mask.resize(static_cast<std::size_t>(rig.rest.rows()));
+  for (Eigen::Index v = 0; v < rig.rest.rows(); ++v)
+    rig.relax_mask[static_cast<std::size_t>(v)] = std::round(4.0f * (rig.rest(v, 0) - lo) / (hi - lo)) / 4.0f;
+  return rig;
+}
+
+}  // namespace
+
+TEST_CASE("rig_io: the relaxation mask round-trips as the glTF attribute _RELAX_MASK",
+          "[skinning][io][mask][unit]") {
+  const Rig rig = masked_bar();
+  TempDir dir("mask");
+  const std::string ext = GENERATE(std::string(".glb"), std::string(".gltf"));
+  save_rig(rig, dir.file("bar" + ext));
+  LoadReport report;
+  const Rig back = load_rig(dir.file("bar" + ext), {}, &report);
+  REQUIRE(back.relax_mask.size() == static_cast<std::size_t>(back.rest.rows()));
+  CHECK(report.mask_source == "attribute _RELAX_MASK");
+  // Welded back to the same vertices (output order), the same values.
+  for (Eigen::Index v = 0; v < back.rest.rows(); ++v) {
+    Eigen::Index same = -1;
+    for (Eigen::Index u = 0; u < rig.rest.rows(); ++u)
+      if (rig.rest.row(u) == back.rest.row(v)) same = u;
+    REQUIRE(same >= 0);
+    CHECK(back.relax_mask[std::size_t(v)] == rig.relax_mask[std::size_t(same)]);
+  }
+  // Another attribute name, or none: no mask.
+  LoadOptions other;
+  other.mask.attribute = "_PAINT";
+  CHECK(load_rig(dir.file("bar" + ext), other).relax_mask.empty());
+  other.mask.attribute.clear();
+  CHECK(load_rig(dir.file("bar" + ext), other).relax_mask.empty());
+  // A rig without a mask writes none.
+  save_rig(bar_rig(), dir.file("plain" + ext));
+  CHECK(load_rig(dir.file("plain" + ext)).relax_mask.empty());
+
+  // The baked glb carries it too, one value per output vertex.
+  const std::vector<track::Positions> frames(2, rig.rest);
+  write_baked_glb(rig, frames, 24.0, dir.file("baked.glb"));
+  const Glb g = parse_glb(dir.file("baked.glb"));
+  const json& attrs = g.doc["meshes"][0]["primitives"][0]["attributes"];
+  REQUIRE(attrs.contains("_RELAX_MASK"));
+  const std::vector<float> m = float_accessor(g, attrs["_RELAX_MASK"].get<int>(), 1);
+  REQUIRE(m.size() == rig.output.to_welded.size());
+  for (std::size_t o = 0; o < m.size(); ++o)
+    CHECK(m[o] == rig.relax_mask[static_cast<std::size_t>(rig.output.to_welded[o])]);
+}
+
+TEST_CASE("rig_io: the relaxation mask from a vertex-colour set, and bad masks", "[skinning][io][mask][unit]") {
+  const Rig rig = masked_bar();
+  TempDir dir("mask_color");
+  save_rig(rig, dir.file("bar.gltf"));
+  // Replace each primitive's _RELAX_MASK by COLOR_0 = (0.25, 0, 2, 1) in a second buffer, as a
+  // painter's vertex colours would carry it (the blue channel out of range: clamped).
+  json doc = json::parse(std::ifstream(dir.file("bar.gltf")));
+  std::vector<std::uint8_t> bin;
+  for (json& mesh : doc["meshes"])
+    for (json& prim : mesh["primitives"]) {
+      const int mask_accessor = prim["attributes"]["_RELAX_MASK"].get<int>();
+      const std::size_t n = doc["accessors"][std::size_t(mask_accessor)]["count"].get<std::size_t>();
+      prim["attributes"].erase("_RELAX_MASK");
+      const std::size_t offset = bin.size();
+      for (std::size_t i = 0; i < n; ++i)
+        for (const float x : {0.25f, 0.f, 2.f, 1.f}) {
+          std::uint8_t b[4];
+          std::memcpy(b, &x, 4);
+          bin.insert(bin.end(), b, b + 4);
+        }
+      json view = {{"buffer", doc["buffers"].size()}, {"byteOffset", offset}, {"byteLength", 16 * n}};
+      doc["bufferViews"].push_back(view);
+      json acc = {{"bufferView", doc["bufferViews"].size() - 1}, {"componentType", 5126}, {"count", n}, {"type", "VEC4"}};
+      doc["accessors"].push_back(acc);
+      prim["attributes"]["COLOR_0"] = doc["accessors"].size() - 1;
+    }
+  doc["buffers"].push_back({{"byteLength", bin.size()}, {"uri", "data:application/octet-stream;base64," + base64(bin)}});
+  std::ofstream(dir.file("painted.gltf")) << doc.dump();
+  LoadOptions o;
+  o.mask.color_set = 0;
+  o.mask.channel = 0;
+  LoadReport report;
+  Rig red = load_rig(dir.file("painted.gltf"), o, &report);
+  CHECK(report.mask_source == "vertex colour set 0 channel r");
+  REQUIRE(red.relax_mask.size() == static_cast<std::size_t>(red.rest.rows()));
+  for (float m : red.relax_mask) CHECK(m == 0.25f);
+  o.mask.channel = 2;  // 2.0: clamped to 1
+  for (float m : load_rig(dir.file("painted.gltf"), o).relax_mask) CHECK(m == 1.0f);
+  o.mask.color_set = 1;  // no such set: no mask
+  CHECK(load_rig(dir.file("painted.gltf"), o).relax_mask.empty());
+  CHECK(load_rig(dir.file("painted.gltf")).relax_mask.empty());  // no attribute, no set chosen
+  o.mask.color_set = 9;
+  CHECK_THAT(error_of([&] { load_rig(dir.file("painted.gltf"), o); }), Catch::Contains("mask.color_set"));
+  o.mask.color_set = 0;
+  o.mask.channel = 4;
+  CHECK_THAT(error_of([&] { load_rig(dir.file("painted.gltf"), o); }), Catch::Contains("mask.channel"));
+
+  // A rig's own mask must fit it.
+  Rig bad = masked_bar();
+  bad.relax_mask.pop_back();
+  CHECK_THAT(error_of([&] { validate(bad); }), Catch::Contains("relaxation mask") && Catch::Contains("values for"));
+  bad = masked_bar();
+  bad.relax_mask[3] = -0.5f;
+  CHECK_THAT(error_of([&] { validate(bad); }), Catch::Contains("relaxation mask of vertex 3"));
+}

@@ -2,6 +2,7 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <limits>
 
 #include "isokit/core/error.h"
 #include "isokit/skinning/animation.h"
@@ -107,5 +108,90 @@ TEST_CASE(
         CHECK(prop > 1e-4 * diag);  // projected onto the field like skin
       CHECK(skin > 1e-4 * diag);    // the skin is tracked, not skinned
     }
+  }
+}
+
+namespace {
+
+/// The cylinder bent at Bone1 by 60° in 5 frames, its Bone1 part (the fitted partition) and the
+/// bbox diagonal.
+struct MaskScene {
+  Rig rig = make_cylinder();
+  std::vector<Pose> poses = bend_animation(rig, {parse_bend("Bone1:x:60", rig)}, 5);
+  std::vector<int> part;  ///< vertices of Bone1's part
+  double diag = (rig.rest.colwise().maxCoeff() - rig.rest.colwise().minCoeff()).cast<double>().norm();
+  BakeOptions quick;
+
+  MaskScene() {
+    quick.self_intersections = false;
+    const std::vector<int> partition = Skinner(rig).fitted().partition();  // a copy: the Skinner goes
+    for (std::size_t v = 0; v < partition.size(); ++v)
+      if (partition[v] == 1) part.push_back(static_cast<int>(v));
+  }
+
+  /// Largest distance of the part's vertices to their rigid positions (Bone1's transform), over
+  /// the frames of `r`.
+  double from_rigid(const BakeResult& r) const {
+    double d = 0;
+    for (std::size_t f = 0; f < poses.size(); ++f) {
+      const Affine m = skinning_matrices(rig, poses[f])[1];
+      for (int v : part) {
+        const Eigen::Vector3d rigid = m * rig.rest.row(v).cast<double>().transpose();
+        d = std::max(d, (r.frames[f].row(v).cast<double>().transpose() - rigid).norm());
+      }
+    }
+    return d;
+  }
+};
+
+}  // namespace
+
+TEST_CASE("relaxation mask: 0 moves the vertices rigidly with their bone, from the setup or the file",
+          "[skinning][rigid][mask][unit]") {
+  MaskScene sc;
+  REQUIRE(sc.part.size() > 20);
+  SkinSetup by_joint;
+  by_joint.joints["Bone1"].relaxation = 0.0f;
+  Rig painted = sc.rig;
+  painted.relax_mask.assign(static_cast<std::size_t>(sc.rig.rest.rows()), 1.0f);
+  for (int v : sc.part) painted.relax_mask[static_cast<std::size_t>(v)] = 0.0f;
+  const BakeResult dqs = Skinner(sc.rig).bake(Method::kDqs, sc.poses, sc.quick);
+  for (const Method m : {Method::kTracking2014, Method::kImplicit2013}) {
+    INFO(to_string(m));
+    const BakeResult a = Skinner(sc.rig, by_joint).bake(m, sc.poses, sc.quick);
+    const BakeResult b = Skinner(painted).bake(m, sc.poses, sc.quick);
+    const BakeResult free = Skinner(sc.rig).bake(m, sc.poses, sc.quick);
+    CHECK(sc.from_rigid(a) <= 1e-6 * sc.diag);
+    CHECK(sc.from_rigid(free) > 1e-4 * sc.diag);  // tracked without the mask
+    for (std::size_t f = 0; f < sc.poses.size(); ++f) CHECK(a.frames[f] == b.frames[f]);  // the same mask
+    // The rest of the skin is still tracked.
+    double skin = 0;
+    std::vector<char> in_part(static_cast<std::size_t>(sc.rig.rest.rows()), 0);
+    for (int v : sc.part) in_part[static_cast<std::size_t>(v)] = 1;
+    for (std::size_t f = 0; f < sc.poses.size(); ++f)
+      for (Eigen::Index v = 0; v < sc.rig.rest.rows(); ++v)
+        if (!in_part[static_cast<std::size_t>(v)])
+          skin = std::max(skin, double((a.frames[f].row(v) - dqs.frames[f].row(v)).norm()));
+    CHECK(skin > 1e-4 * sc.diag);
+    CHECK(a.frames.back().allFinite());
+  }
+}
+
+TEST_CASE("relaxation mask: a value between 0 and 1 pulls toward the rigid position, more as it falls",
+          "[skinning][rigid][mask][unit]") {
+  MaskScene sc;
+  for (const Method m : {Method::kTracking2014, Method::kImplicit2013}) {
+    INFO(to_string(m));
+    double last = std::numeric_limits<double>::infinity();
+    for (const float value : {1.0f, 0.6f, 0.2f, 0.0f}) {
+      INFO("mask " << value);
+      Rig rig = sc.rig;
+      rig.relax_mask.assign(static_cast<std::size_t>(rig.rest.rows()), 1.0f);
+      for (int v : sc.part) rig.relax_mask[static_cast<std::size_t>(v)] = value;
+      const double d = sc.from_rigid(Skinner(rig).bake(m, sc.poses, sc.quick));
+      CHECK(d < last);
+      last = d;
+    }
+    CHECK(last <= 1e-6 * sc.diag);
   }
 }

@@ -66,9 +66,42 @@ def _deforming_parent(bone, names):
     return p
 
 
+MASK_NAME = "_RELAX_MASK"
+# Blender 3.4's glTF exporter writes a mesh attribute NAME as the custom attribute "_" + NAME
+# upper-cased: an attribute RELAX_MASK reaches the file as _RELAX_MASK. Both names are read.
+MASK_NAMES = (MASK_NAME, "RELAX_MASK")
+
+
+def read_mask(obj, mesh):
+    """The painted relaxation mask of one mesh (V,) float32 in [0, 1], or None: a float point
+    attribute named _RELAX_MASK or RELAX_MASK, else a vertex group of either name (weight paint;
+    unassigned vertices read 1)."""
+    n = len(mesh.vertices)
+    attr = next((mesh.attributes[k] for k in MASK_NAMES if k in mesh.attributes), None)
+    if attr is not None:
+        if attr.domain != "POINT" or attr.data_type != "FLOAT":
+            raise BakeError(f"mesh '{obj.name}': attribute {attr.name} is {attr.data_type} on {attr.domain}; "
+                            "make it a Float attribute on the Vertex (point) domain")
+        m = np.empty(n, np.float32)
+        attr.data.foreach_get("value", m)
+    else:
+        group = next((obj.vertex_groups[k] for k in MASK_NAMES if k in obj.vertex_groups), None)
+        if group is None:
+            return None
+        m = np.ones(n, np.float32)
+        for v in mesh.vertices:
+            for g in v.groups:
+                if g.group == group.index:
+                    m[v.index] = g.weight
+    if not np.all(np.isfinite(m)):
+        raise BakeError(f"mesh '{obj.name}': the relaxation mask has values that are not finite; paint 0 .. 1")
+    return np.clip(m, 0.0, 1.0)
+
+
 def read_rig(context, meshes, armature):
     """Arrays of the rig: vertices (V, 3) world, triangles (F, 3), joint names, parents, bind
-    world transforms (J, 4, 4), dense weights (V, J), and per mesh its vertex range."""
+    world transforms (J, 4, 4), dense weights (V, J), the relaxation mask (V,) or None when no mesh
+    has one (read_mask), and per mesh its vertex range."""
     bones = _bones_parents_first(armature)
     if not bones:
         raise BakeError(f"armature '{armature.name}' has no deforming bone")
@@ -81,7 +114,7 @@ def read_rig(context, meshes, armature):
     arm_world = _matrix(armature.matrix_world)
     bind_world = np.stack([arm_world @ _matrix(b.matrix_local) for b in bones])
 
-    verts, tris, weights, ranges = [], [], [], []
+    verts, tris, weights, masks, ranges = [], [], [], [], []
     offset = 0
     for obj in meshes:
         mods = [m for m in obj.modifiers if m.type == "ARMATURE"]
@@ -109,6 +142,7 @@ def read_rig(context, meshes, armature):
                         j = index.get(groups.get(g.group, ""))
                         if j is not None and g.weight > 0:
                             w[v.index, j] += g.weight
+                masks.append(read_mask(obj, mesh))
             finally:
                 evaluated.to_mesh_clear()
         finally:
@@ -131,6 +165,8 @@ def read_rig(context, meshes, armature):
         "parents": parents,
         "bind_world": bind_world,
         "weights": np.vstack(weights),
+        "mask": None if all(m is None for m in masks) else np.concatenate(
+            [np.ones(len(v), np.float32) if m is None else m for v, m in zip(verts, masks)]),
         "ranges": ranges,
     }
 
@@ -157,6 +193,8 @@ def bake(arrays, poses, method="tracking2014", setup=None, progress=None):
 
     rig = skinning.Rig.from_arrays(arrays["vertices"], arrays["triangles"], arrays["joints"], arrays["parents"],
                                    arrays["bind_world"], arrays["weights"], name="blender")
+    if arrays.get("mask") is not None:
+        rig.relax_mask = arrays["mask"]
     skinner = skinning.Skinner(rig, setup=setup or None, progress=progress)
     return skinner.bake(method, poses=poses, self_intersections=False, progress=progress).frames
 

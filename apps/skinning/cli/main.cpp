@@ -76,6 +76,19 @@ void print_rigid_pieces(const Rig& rig) {
   if (pieces.size() > 40) std::printf("  ... (%zu more)\n", pieces.size() - 40);
 }
 
+/// The painted relaxation mask (Rig::relax_mask): how many vertices are rigid (0) and pulled (< 1).
+void print_mask(const Rig& rig) {
+  if (rig.relax_mask.empty()) {
+    std::printf("relaxation mask: none (every vertex tracked)\n");
+    return;
+  }
+  const auto rigid = std::count(rig.relax_mask.begin(), rig.relax_mask.end(), 0.0f);
+  const auto pulled = std::count_if(rig.relax_mask.begin(), rig.relax_mask.end(),
+                                    [](float m) { return m > 0.0f && m < 1.0f; });
+  std::printf("relaxation mask: %lld rigid, %lld pulled toward their bone, of %zu vertices\n",
+              static_cast<long long>(rigid), static_cast<long long>(pulled), rig.relax_mask.size());
+}
+
 void print_info(const Rig& rig, const std::string& spec) {
   std::printf("rig: %s\n", spec.c_str());
   std::printf(
@@ -92,6 +105,7 @@ void print_info(const Rig& rig, const std::string& spec) {
   std::printf("weights per vertex: mean %.2f, max %d\n", mean_w, max_w);
   print_surface(rig);
   print_rigid_pieces(rig);
+  print_mask(rig);
   std::printf("joints: %zu\n", rig.joints.size());
   const std::vector<Eigen::Vector3d> p = rest_joint_positions(rig);
   for (std::size_t j = 0; j < rig.joints.size(); ++j) {
@@ -227,7 +241,7 @@ CLI::App* add_info(CLI::App& app, Args& a) {
   info->add_flag("--fit", a.info_fit,
                  "also fit the primitives and report each joint's (vertices, r, closure points, and how "
                  "many rest vertices of other joints lie inside it)");
-  info->add_option("--setup", a.info_setup, "JSON setup file for --fit");
+  info->add_option("--setup", a.info_setup, "JSON setup file (its `mask` section; the fit options for --fit)");
   return info;
 }
 
@@ -303,20 +317,21 @@ void check_numbers(const Args& a) {
 }
 
 /// The rig, its loader warnings printed on stderr.
-Rig open_and_warn(const Args& a, const Progress& progress) {
+Rig open_and_warn(const Args& a, const Progress& progress, const MaskSource& mask) {
   const Stage stage("reading " + a.rig);
   std::vector<std::string> warnings;
-  Rig rig = open_rig(a.rig, a.fps, progress, &warnings);
+  Rig rig = open_rig(a.rig, a.fps, progress, &warnings, mask);
   for (const std::string& w : warnings) std::fprintf(stderr, "  warning: %s\n", w.c_str());
   return rig;
 }
 
 int run_info(const Args& a, const Progress& progress) {
-  Rig rig = open_and_warn(a, progress);
+  const SkinSetup setup = a.info_setup.empty() ? SkinSetup{} : load_setup(a.info_setup);
+  Rig rig = open_and_warn(a, progress, setup.mask);
   print_info(rig, a.rig);
   if (a.info_fit) {
     const Stage stage("fitting the part fields of " + a.rig);
-    Skinner skinner(std::move(rig), a.info_setup.empty() ? SkinSetup{} : load_setup(a.info_setup), progress);
+    Skinner skinner(std::move(rig), setup, progress);
     const FitQuality q = print_fit(skinner.fitted());
     print_agreement(q, skinner.fitted(), skinner);
     print_operators(skinner.fitted(), skinner.setup());
@@ -336,7 +351,7 @@ int run_bake(const Args& a, const std::vector<Method>& methods, Method main, con
   if (a.max_step > 0) setup.substeps.max_step_rad = a.max_step;
   std::fprintf(stderr, "isokit-skin: loading %s\n", a.rig.c_str());
   const auto t0 = std::chrono::steady_clock::now();
-  const Rig rig = open_and_warn(a, progress);
+  const Rig rig = open_and_warn(a, progress, setup.mask);
   AnimationRequest request = a.animation;
   request.fps = a.fps;
   const Animation animation = [&] {

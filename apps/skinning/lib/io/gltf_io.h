@@ -87,9 +87,15 @@ tinygltf::Model read_model(const std::string& path, std::vector<std::string>* wa
 /// The scene of `model` as the loader reads every format: an aiScene built as assimp's glTF
 /// importer builds it (io/gltf_scene.cpp says where and why it differs). `node_names`: one unique
 /// name per node. \throw InputError naming `path` for a node cycle or a bad accessor.
-/// What it decodes is charged to `budget` when given.
+/// What it decodes is charged to `budget` when given. A primitive's COLOR_n (n < kMaskColorSet)
+/// becomes the mesh's colour set n; its scalar attribute `mask_attribute` (non-empty; the
+/// relaxation mask, LoadOptions::mask_attribute) becomes colour set kMaskColorSet (r = g = b = value).
 std::unique_ptr<aiScene> to_ai_scene(const tinygltf::Model& model, const std::vector<std::string>& node_names,
-                                     const std::string& path, LoadBudget* budget = nullptr);
+                                     const std::string& path, LoadBudget* budget = nullptr,
+                                     const std::string& mask_attribute = "");
+
+/// The aiMesh colour set that carries a glTF primitive's relaxation-mask attribute.
+constexpr unsigned kMaskColorSet = 7;
 
 /// Reads accessor `index` as doubles (`count * components` values; normalized integers mapped to
 /// [0, 1] / [-1, 1], sparse substitution applied). Every declared size is checked before anything

@@ -79,8 +79,8 @@ constexpr std::uint64_t kSceneBytesPerTriangle = 96;
 class SceneBuilder {
  public:
   SceneBuilder(const tinygltf::Model& model, const std::vector<std::string>& node_names,
-               const std::string& path, LoadBudget* budget)
-      : m_(model), names_(node_names), path_(path), budget_(budget) {}
+               const std::string& path, LoadBudget* budget, const std::string& mask_attribute)
+      : m_(model), names_(node_names), path_(path), budget_(budget), mask_attribute_(mask_attribute) {}
 
   std::unique_ptr<aiScene> build();
 
@@ -89,12 +89,14 @@ class SceneBuilder {
   std::vector<unsigned> meshes_of(int node_index);
   std::unique_ptr<aiMesh> primitive_mesh(const tinygltf::Mesh& mesh, std::size_t mesh_index, std::size_t p);
   void add_bones(aiMesh* mesh, const tinygltf::Primitive& prim, const tinygltf::Skin& skin);
+  void add_colors(aiMesh* mesh, const tinygltf::Primitive& prim, const std::string& what);
   aiAnimation* animation(const tinygltf::Animation& a, std::size_t index);
 
   const tinygltf::Model& m_;
   const std::vector<std::string>& names_;
   const std::string& path_;
   LoadBudget* budget_;
+  const std::string& mask_attribute_;
   std::vector<std::unique_ptr<aiMesh>> meshes_;
   std::map<int, std::vector<unsigned>> mesh_ids_;  ///< glTF mesh -> its aiMesh indices
   std::vector<std::unique_ptr<aiCamera>> cameras_;
@@ -177,7 +179,41 @@ std::unique_ptr<aiMesh> SceneBuilder::primitive_mesh(const tinygltf::Mesh& mesh,
     mesh_out->mFaces[f].mNumIndices = 3;
     mesh_out->mFaces[f].mIndices = new unsigned[3]{tris[f][0], tris[f][1], tris[f][2]};
   }
+  add_colors(mesh_out.get(), prim, what);
   return mesh_out;
+}
+
+/// The primitive's COLOR_n (RGB or RGBA) as colour sets n < kMaskColorSet, and its mask attribute
+/// (a scalar per vertex) as set kMaskColorSet.
+void SceneBuilder::add_colors(aiMesh* mesh, const tinygltf::Primitive& prim, const std::string& what) {
+  const unsigned nv = mesh->mNumVertices;
+  auto set = [&](unsigned k, const std::vector<double>& v, int comps) {
+    mesh->mColors[k] = new aiColor4D[std::max(nv, 1u)];
+    for (unsigned i = 0; i < nv; ++i) {
+      const double* c = v.data() + std::size_t(i) * std::size_t(comps);
+      mesh->mColors[k][i] = comps == 1 ? aiColor4D(float(c[0]), float(c[0]), float(c[0]), 1.f)
+                                       : aiColor4D(float(c[0]), float(c[1]), float(c[2]), comps == 4 ? float(c[3]) : 1.f);
+    }
+  };
+  for (unsigned k = 0; k < kMaskColorSet; ++k) {
+    const auto it = prim.attributes.find("COLOR_" + std::to_string(k));
+    if (it == prim.attributes.end()) continue;
+    int comps = 0;
+    const std::string w = what + " COLOR_" + std::to_string(k);
+    const std::vector<double> v = read_accessor(m_, it->second, &comps, w, budget_);
+    require(comps == 3 || comps == 4, w, "has " + std::to_string(comps) + " components, not 3 or 4",
+            "fix the file or export it again");
+    require(v.size() == std::size_t(nv) * std::size_t(comps), w, "count differs from POSITION's",
+            "fix the file or export it again");
+    set(k, v, comps);
+  }
+  if (mask_attribute_.empty()) return;
+  const auto it = prim.attributes.find(mask_attribute_);
+  if (it == prim.attributes.end()) return;
+  const std::string w = what + " " + mask_attribute_;
+  const std::vector<float> v = floats(m_, it->second, 1, w, budget_);
+  require(v.size() == nv, w, "count differs from POSITION's", "fix the file or export it again");
+  set(kMaskColorSet, std::vector<double>(v.begin(), v.end()), 1);
 }
 
 /// One bone per joint of `skin` (named by the joint node, offset = its inverse bind matrix or the
@@ -390,8 +426,9 @@ std::unique_ptr<aiScene> SceneBuilder::build() {
 }  // namespace
 
 std::unique_ptr<aiScene> to_ai_scene(const tinygltf::Model& model, const std::vector<std::string>& node_names,
-                                     const std::string& path, LoadBudget* budget) {
-  return SceneBuilder(model, node_names, path, budget).build();
+                                     const std::string& path, LoadBudget* budget,
+                                     const std::string& mask_attribute) {
+  return SceneBuilder(model, node_names, path, budget, mask_attribute).build();
 }
 
 }  // namespace isokit::skinning::gltf

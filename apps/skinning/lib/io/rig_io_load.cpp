@@ -443,6 +443,8 @@ struct FileMesh {
   std::vector<Eigen::Vector3f> pos;
   std::vector<std::vector<std::pair<int, float>>> w;
   std::vector<Eigen::Vector3i> tris;
+  std::vector<float> mask;  ///< relaxation mask per vertex (1 where a mesh has none)
+  std::string mask_source;  ///< where the first mesh with a mask had it ("" = none)
 };
 
 class Loader {
@@ -467,6 +469,8 @@ class Loader {
   void append_mesh(const MeshUse& m, bool weights, FileMesh& file);
   std::vector<int> append_triangles(const MeshUse& m, FileMesh& file) const;
   void append_weights(const MeshUse& m, const std::vector<int>& local_to_out, FileMesh& file) const;
+  void append_mask(const MeshUse& m, const std::vector<int>& local_to_out, FileMesh& file) const;
+  void weld_mask(const FileMesh& file);
   std::vector<int> weld_file_mesh(const FileMesh& file);
   void weld_weights(const FileMesh& file, const std::vector<int>& first);
   void build_clips();
@@ -758,6 +762,7 @@ void Loader::build_mesh() {
   const std::vector<int> first = weld_file_mesh(file);
   const int nw = static_cast<int>(first.size());
   if (weights) weld_weights(file, first);
+  weld_mask(file);
   report_.meshes = static_cast<int>(meshes_.size());
   report_.file_vertices = static_cast<int>(nout);
   report_.welded_vertices = nw;
@@ -774,6 +779,44 @@ void Loader::append_mesh(const MeshUse& m, bool weights, FileMesh& file) {
   rig_.output.primitive_offsets.push_back(static_cast<int>(file.tris.size()));
   file.w.resize(file.pos.size());
   if (weights) append_weights(m, local_to_out, file);
+  append_mask(m, local_to_out, file);
+}
+
+/// Appends the relaxation mask of `m`'s used vertices (LoadOptions::mask_color_set, else the glTF
+/// mask attribute carried in colour set gltf::kMaskColorSet; 1 where the mesh has neither).
+void Loader::append_mask(const MeshUse& m, const std::vector<int>& local_to_out, FileMesh& file) const {
+  const aiMesh* mesh = m.mesh;
+  const bool chosen = options_.mask.color_set >= 0;
+  const unsigned set = chosen ? static_cast<unsigned>(options_.mask.color_set) : gltf::kMaskColorSet;
+  const bool has = set < AI_MAX_NUMBER_OF_COLOR_SETS && mesh->HasVertexColors(set) &&
+                   (chosen || own_scene_ != nullptr);
+  file.mask.resize(file.pos.size(), 1.f);
+  if (!has) return;
+  if (file.mask_source.empty())
+    file.mask_source = chosen ? "vertex colour set " + std::to_string(set) + " channel " + "rgba"[options_.mask.channel]
+                              : "attribute " + options_.mask.attribute;
+  for (unsigned v = 0; v < mesh->mNumVertices; ++v) {
+    const int o = local_to_out[v];
+    if (o < 0) continue;
+    const aiColor4D& c = mesh->mColors[set][v];
+    const float x = options_.mask.channel == 0 ? c.r : options_.mask.channel == 1 ? c.g
+                  : options_.mask.channel == 2 ? c.b : c.a;
+    require(std::isfinite(x), path_ + ": mesh " + quote(m.name) + " vertex " + std::to_string(v),
+            "relaxation mask (" + file.mask_source + ") is not finite", "paint values in [0, 1] and export again");
+    file.mask[static_cast<std::size_t>(o)] = std::clamp(x, 0.f, 1.f);
+  }
+}
+
+/// The welded relaxation mask: the smallest value of the merged copies (a seam painted rigid on
+/// one side stays rigid); none when no mesh had one.
+void Loader::weld_mask(const FileMesh& file) {
+  report_.mask_source = file.mask_source;
+  if (file.mask_source.empty()) return;
+  rig_.relax_mask.assign(static_cast<std::size_t>(rig_.rest.rows()), 1.f);
+  for (std::size_t i = 0; i < file.mask.size(); ++i) {
+    float& m = rig_.relax_mask[static_cast<std::size_t>(rig_.output.to_welded[i])];
+    m = std::min(m, file.mask[i]);
+  }
 }
 
 /// Appends the triangles of `m` and the vertices they use (in rig rest space, in the file's
@@ -1060,6 +1103,11 @@ Rig Loader::load() {
   require(options_.weld_tolerance >= 0 && std::isfinite(options_.weld_tolerance),
           path_ + ": LoadOptions::weld_tolerance",
           "must be >= 0 (got " + format_number(options_.weld_tolerance) + ")", "pass 0 for exact welding");
+  require(options_.mask.color_set >= -1 && options_.mask.color_set < int(AI_MAX_NUMBER_OF_COLOR_SETS),
+          path_ + ": LoadOptions::mask.color_set", "must be -1 .. 7 (got " + std::to_string(options_.mask.color_set) + ")",
+          "pass the vertex-colour set of the mask, or -1 for none");
+  require(options_.mask.channel >= 0 && options_.mask.channel <= 3, path_ + ": LoadOptions::mask.channel",
+          "must be 0 .. 3 (got " + std::to_string(options_.mask.channel) + ")", "0 = red, 1 = green, 2 = blue, 3 = alpha");
   std::error_code ec;
   require(fs::exists(path_, ec), path_, "file does not exist", "check the path");
   require(fs::is_regular_file(path_, ec), path_, "is not a regular file", "give the path of a rig file");
@@ -1068,7 +1116,7 @@ Rig Loader::load() {
   if (ext == ".gltf" || ext == ".glb") {
     const tinygltf::Model model = gltf::read_model(path_, &report_.warnings, &budget_);
     gltf_ = check_gltf(model, path_, report_, budget_);
-    own_scene_ = gltf::to_ai_scene(model, gltf_.node_names, path_, &budget_);
+    own_scene_ = gltf::to_ai_scene(model, gltf_.node_names, path_, &budget_, options_.mask.attribute);
     scene_ = own_scene_.get();
   } else {
     const auto bytes = fs::file_size(path_, ec);

@@ -271,7 +271,19 @@ struct SkinnedVertices {
   const Influences& infl;
   int sets;
   std::size_t joints;
+  const std::vector<float>& mask;  ///< Rig::relax_mask (per welded vertex; empty: none)
 };
+
+/// The relaxation mask as the glTF custom attribute `_RELAX_MASK` (a float per output vertex
+/// `verts[i]`; Rig::relax_mask), so that it survives a round trip; nothing without a mask.
+void add_mask(gltf::Builder& b, const std::vector<float>& mask, const std::vector<int>& to_welded,
+              const std::vector<int>& verts, Attributes& attrs) {
+  if (mask.empty()) return;
+  std::vector<float> m(verts.size());
+  for (std::size_t i = 0; i < verts.size(); ++i)
+    m[i] = mask[static_cast<std::size_t>(to_welded[static_cast<std::size_t>(verts[i])])];
+  attrs["_RELAX_MASK"] = b.add_floats(m.data(), m.size(), "SCALAR", false, gltf::kArrayBuffer);
+}
 
 /// Adds JOINTS_s / WEIGHTS_s for the primitive's vertices `verts` (u8 joints up to 256 joints).
 void add_weight_sets(gltf::Builder& b, const SkinnedVertices& sv, const std::vector<int>& verts,
@@ -326,6 +338,7 @@ tinygltf::Primitive skinned_primitive(gltf::Builder& b, const SkinnedVertices& s
   attrs["POSITION"] = b.add_floats(ppos.data(), n, "VEC3", true, gltf::kArrayBuffer);
   attrs["NORMAL"] = b.add_floats(pnrm.data(), n, "VEC3", false, gltf::kArrayBuffer);
   add_weight_sets(b, sv, verts, attrs);
+  add_mask(b, sv.mask, out.to_welded, verts, attrs);
   std::vector<std::uint32_t> idx;
   idx.reserve(3 * static_cast<std::size_t>(f1 - f0));
   for (int f = f0; f < f1; ++f)
@@ -458,7 +471,7 @@ void save_rig(const Rig& rig, const std::string& path) {
   Influences infl;
   if (weighted) infl = sorted_influences(rig, sets);
   require(nj <= 65536, path, "has more than 65536 joints", "glTF joints are 16-bit indices");
-  const SkinnedVertices sv{out, pos, nrm, infl, sets, nj};
+  const SkinnedVertices sv{out, pos, nrm, infl, sets, nj, rig.relax_mask};
   d.meshes.resize(1);
   d.meshes[0].name = "isokit_mesh";
   for (std::size_t p = 0; p + 1 < out.primitive_offsets.size(); ++p) {
@@ -491,6 +504,9 @@ void write_baked_glb(const Rig& rig, const std::vector<track::Positions>& frames
   Attributes& attrs = primitive.attributes;
   attrs["POSITION"] = b.add_floats(rest.data(), nout, "VEC3", true, gltf::kArrayBuffer);
   if (options.normals) attrs["NORMAL"] = b.add_floats(rest_n.data(), nout, "VEC3", false, gltf::kArrayBuffer);
+  std::vector<int> all(nout);
+  for (std::size_t i = 0; i < nout; ++i) all[i] = static_cast<int>(i);
+  add_mask(b, rig.relax_mask, out.to_welded, all, attrs);
   std::vector<std::uint32_t> idx;
   for (Eigen::Index f = 0; f < out.triangles.rows(); ++f)
     for (int k = 0; k < 3; ++k) idx.push_back(static_cast<std::uint32_t>(out.triangles(f, k)));

@@ -197,7 +197,9 @@ std::string encode_rig(const Rig& rig, const LoadReport& report) {
   w.vec(rig.output.to_welded);
   write_matrix(w, rig.output.triangles);
   w.vec(rig.output.primitive_offsets);
+  w.vec(rig.relax_mask);
   w.str(report.format);
+  w.str(report.mask_source);
   for (int v : {report.meshes, report.file_vertices, report.welded_vertices, report.max_influences,
                 report.dropped_triangles, int(report.weights_from_file)})
     w.pod(v);
@@ -241,8 +243,10 @@ void decode_rig(const std::string& bytes, const std::string& source, Rig& rig, L
   rig.output.to_welded = r.vec<int>();
   read_matrix(r, rig.output.triangles);
   rig.output.primitive_offsets = r.vec<int>();
+  rig.relax_mask = r.vec<float>();
   report = LoadReport{};
   report.format = r.str();
+  report.mask_source = r.str();
   for (int* v : {&report.meshes, &report.file_vertices, &report.welded_vertices, &report.max_influences,
                  &report.dropped_triangles})
     *v = r.pod<int>();

@@ -77,7 +77,7 @@ std::vector<std::uint8_t> inverted_flags(const track::FieldFunction& f, const tr
 }  // namespace
 
 Rig open_rig(const std::string& spec, double fps, const Progress& progress,
-             std::vector<std::string>* warnings) {
+             std::vector<std::string>* warnings, const MaskSource& mask) {
   const std::string prefix = "procedural:";
   Rig rig;
   if (spec.rfind(prefix, 0) == 0) {
@@ -85,6 +85,7 @@ Rig open_rig(const std::string& spec, double fps, const Progress& progress,
   } else {
     LoadOptions o;
     o.fps = fps;
+    o.mask = mask;
     LoadReport report;
     rig = load_rig(spec, o, &report);
     if (warnings) *warnings = report.warnings;
@@ -171,12 +172,52 @@ struct BakeState {
   track::Positions current;                           ///< tracking2014: the last result
   Pose previous;                                      ///< tracking2014: the last frame's pose
   std::vector<Affine> prev_skin;                      ///< tracking2014: the last sub-step's matrices
-  std::vector<int> rigid;  ///< vertices of the rigid pieces (SkinSetup::rigid_pieces), else empty
+  /// The relaxation mask per vertex (`vertex_mask`; empty: all 1) and its vertices below 1.
+  std::vector<float> mask;
+  std::vector<int> masked;
+  track::Positions anchors;  ///< the masked vertices' rigid positions at the current sub-step
 };
 
-/// The rigid pieces' vertices take their skinned positions `skinned` (their one transform).
-void place_rigid(const std::vector<int>& rigid, const track::Positions& skinned, track::Positions& pos) {
-  for (int v : rigid) pos.row(v) = skinned.row(v);
+/// The relaxation mask per vertex (2014 Fig. 11): the painted mask (Rig::relax_mask) and the
+/// joint's setup key, the smaller of the two, and 0 on the rigid pieces (SkinSetup::rigid_pieces).
+/// Empty when every vertex is 1.
+std::vector<float> vertex_mask(const Skinner& sk) {
+  const Rig& rig = sk.rig();
+  const SkinSetup& setup = sk.setup();
+  const std::vector<int>& partition = sk.fitted().partition();
+  const std::size_t nv = static_cast<std::size_t>(rig.rest.rows());
+  std::vector<float> mask(nv, 1.0f);
+  for (std::size_t v = 0; v < nv; ++v) {
+    mask[v] = setup.relaxation_for(rig.joints[static_cast<std::size_t>(partition[v])].name);
+    if (!rig.relax_mask.empty()) mask[v] = std::min(mask[v], rig.relax_mask[v]);
+  }
+  if (setup.rigid_pieces)
+    for (const RigidPiece& p : find_rigid_pieces(rig))
+      for (int v : p.vertices) mask[static_cast<std::size_t>(v)] = 0.0f;
+  if (std::all_of(mask.begin(), mask.end(), [](float m) { return m >= 1.0f; })) mask.clear();
+  return mask;
+}
+
+/// The masked vertices' rigid positions (2014 Fig. 11: "rigidly transformed according to their
+/// nearest bone"): each moved by its partition joint's skinning matrix `skin`; other rows untouched.
+void rigid_positions(const Skinner& sk, const std::vector<int>& masked, const std::vector<Affine>& skin,
+                     track::Positions& out) {
+  const std::vector<int>& partition = sk.fitted().partition();
+  const track::Positions& rest = sk.rig().rest;
+  if (out.rows() != rest.rows()) out = rest;
+  for (int v : masked) {
+    const Eigen::Vector3d p = rest.row(v).cast<double>().transpose();
+    out.row(v) = (skin[static_cast<std::size_t>(partition[static_cast<std::size_t>(v)])] * p).cast<float>().transpose();
+  }
+}
+
+/// implicit2013 (no relaxation to carry a pull term): a masked vertex moves to its rigid position
+/// blended with the projected one, `m · projected + (1 − m) · rigid`.
+void blend_masked(const BakeState& s, const track::Positions& rigid, track::Positions& pos) {
+  for (int v : s.masked) {
+    const float m = s.mask[static_cast<std::size_t>(v)];
+    pos.row(v) = pos.row(v) * m + rigid.row(v) * (1.0f - m);
+  }
 }
 
 void check_poses(const Rig& rig, const std::vector<Pose>& poses) {
@@ -187,8 +228,8 @@ void check_poses(const Rig& rig, const std::vector<Pose>& poses) {
 }
 
 /// The 2014 tracker on the rest mesh (2014 §5): iso-values sampled at rest, the rest field given
-/// (triangles inverted at rest, free vertices), the per-joint relaxation mask (2014 Fig. 11) and the
-/// fold-repair mask of parts too small for its smoothing (docs/skinning.md, "Low-poly rigs").
+/// (triangles inverted at rest, free vertices) and the fold-repair mask of parts too small for its
+/// smoothing (docs/skinning.md, "Low-poly rigs"); start_bake adds the relaxation mask.
 std::unique_ptr<track::IsoSurfaceTracker> make_tracker(const Skinner& sk, const SkinField& field,
                                                        std::size_t grain) {
   const Rig& rig = sk.rig();
@@ -200,9 +241,6 @@ std::unique_ptr<track::IsoSurfaceTracker> make_tracker(const Skinner& sk, const 
   to.grain = grain;
   auto tracker = std::make_unique<track::IsoSurfaceTracker>(rig.rest, rig.triangles, std::move(iso), to);
   tracker->set_rest_field(field.function());
-  std::vector<float> mask(static_cast<std::size_t>(nv));
-  for (int v = 0; v < nv; ++v) mask[v] = setup.relaxation_for(rig.joints[partition[v]].name);
-  tracker->set_relaxation_mask(std::move(mask));
   if (setup.fold_repair_min_part_vertices > 0) {
     std::vector<std::uint8_t> movable(static_cast<std::size_t>(nv));
     for (int v = 0; v < nv; ++v)
@@ -245,8 +283,13 @@ void track_frame(const Skinner& sk, BakeState& s, const Pose& pose, std::size_t 
     dual_quaternion_blend(rig.weights, skin, rig.rest, scratch, &rotations, grain);
     if (s.guard) st.axis_guard_moves += s.guard->apply(skin, s.current);
     s.field->set_pose(skin);
-    const track::TrackStats ts = s.tracker->track(s.field->function(), rotations, s.current);
-    place_rigid(s.rigid, scratch, s.current);
+    track::TrackStats ts;
+    if (s.masked.empty()) {
+      ts = s.tracker->track(s.field->function(), rotations, s.current);
+    } else {
+      rigid_positions(sk, s.masked, skin, s.anchors);
+      ts = s.tracker->track(s.field->function(), rotations, s.current, s.anchors);
+    }
     ++st.tracker_calls;
     st.capped_calls += ts.converged ? 0 : 1;
     st.call_iterations.push_back(ts.iterations);
@@ -275,10 +318,12 @@ const std::vector<std::uint8_t>* deform(const Skinner& sk, Method method, BakeSt
       return nullptr;
     case Method::kImplicit2013: {
       dual_quaternion_blend(rig.weights, skin, rig.rest, pos, nullptr, grain);
-      const track::Positions skinned = s.rigid.empty() ? track::Positions{} : pos;
       s.field->set_pose(skin);
       const track::TrackStats ts = s.projector->project(s.field->function(), pos);
-      place_rigid(s.rigid, skinned, pos);
+      if (!s.masked.empty()) {
+        rigid_positions(sk, s.masked, skin, s.anchors);
+        blend_masked(s, s.anchors, pos);
+      }
       st.tracker_calls = 1;
       st.capped_calls = ts.converged ? 0 : 1;
       st.call_iterations = {ts.iterations};
@@ -317,17 +362,13 @@ void start_bake(Skinner& sk, Method method, const BakeOptions& options, BakeStat
   s.current = rig.rest;
   s.previous = rest;
   s.prev_skin = skinning_matrices(rig, rest);
-  if (setup.rigid_pieces && (method == Method::kTracking2014 || method == Method::kImplicit2013)) {
-    for (const RigidPiece& p : find_rigid_pieces(rig))
-      s.rigid.insert(s.rigid.end(), p.vertices.begin(), p.vertices.end());
-    if (s.tracker && !s.rigid.empty()) {  // no tangential moves on them (they are put back anyway)
-      const std::vector<int>& partition = sk.fitted().partition();
-      std::vector<float> mask(static_cast<std::size_t>(rig.rest.rows()));
-      for (std::size_t v = 0; v < mask.size(); ++v)
-        mask[v] = setup.relaxation_for(rig.joints[partition[v]].name);
-      for (int v : s.rigid) mask[static_cast<std::size_t>(v)] = 0.0f;
-      s.tracker->set_relaxation_mask(std::move(mask));
-    }
+  if (method == Method::kTracking2014 || method == Method::kImplicit2013) s.mask = vertex_mask(sk);
+  for (std::size_t v = 0; v < s.mask.size(); ++v)
+    if (s.mask[v] < 1.0f) s.masked.push_back(static_cast<int>(v));
+  if (s.tracker && !s.masked.empty()) {  // 2014 Fig. 11 as a term of the tracker's solve
+    std::vector<float> stiffness(s.mask.size());
+    for (std::size_t v = 0; v < s.mask.size(); ++v) stiffness[v] = 1.0f - s.mask[v];
+    s.tracker->set_anchor_stiffness(std::move(stiffness));
   }
 }
 

@@ -188,7 +188,7 @@ void read_joints(const json& js, const std::string& source, const std::string& b
     read(it.value(), "relaxation", js_.relaxation, w);
     require(js_.relaxation >= 0 && js_.relaxation <= 1, w + ".relaxation",
             "must be in [0, 1] (got " + format_number(js_.relaxation) + ")",
-            "0 = no tangential move, 1 = full");
+            "0 = rigid with the joint, 1 = tracked (between: pulled toward the rigid position)");
     if (it.value().contains("spec")) {
       js_.spec = read_spec_file(it.value(), "spec", w, base_dir);
       if (js_.op == JointOperator::kUnion || js_.op == JointOperator::kBlend)
@@ -423,6 +423,22 @@ void read_projector(const json& p, const std::string& w, track::ProjectorOptions
   read(p, "beta_diffusion_steps", projector.smoothing.beta_diffusion_steps, w);
 }
 
+/// Section `mask`: where the rig file keeps the relaxation mask (MaskSource).
+void read_mask(const json& m, const std::string& w, MaskSource& mask) {
+  check_keys(m, {"attribute", "color_set", "channel"}, w);
+  read(m, "attribute", mask.attribute, w);
+  read(m, "color_set", mask.color_set, w);
+  require(mask.color_set >= -1 && mask.color_set <= 7, w + ".color_set",
+          "must be -1 .. 7 (got " + std::to_string(mask.color_set) + ")",
+          "give the vertex-colour set that holds the mask (0 = the first), or -1 for none");
+  std::string channel = "r";
+  read(m, "channel", channel, w);
+  const std::string names = "rgba";
+  require(channel.size() == 1 && names.find(channel[0]) != std::string::npos, w + ".channel",
+          "unknown channel '" + channel + "'", "use \"r\", \"g\", \"b\" or \"a\"");
+  mask.channel = static_cast<int>(names.find(channel[0]));
+}
+
 /// Section `substeps`: animation sub-stepping (SubstepOptions, 2014 §5.2).
 void read_substeps(const json& p, const std::string& w, SubstepOptions& substeps) {
   check_keys(p, {"paper_rule", "fold_rule", "min_step_rad", "max_step_rad", "max_substeps"}, w);
@@ -473,7 +489,7 @@ SkinSetup setup_from_json(const std::string& text, const std::string& source, co
   s.source = source;
   check_keys(j,
              {"version", "preset", "tree", "default_operator", "joints", "fit", "operators", "tracker",
-              "projector", "substeps"},
+              "projector", "substeps", "mask"},
              source);
   if (j.contains("preset")) {
     const json& p = j.at("preset");
@@ -496,6 +512,7 @@ SkinSetup setup_from_json(const std::string& text, const std::string& source, co
   if (j.contains("tracker")) read_tracker(j.at("tracker"), source + ".tracker", s);
   if (j.contains("projector")) read_projector(j.at("projector"), source + ".projector", s.projector);
   if (j.contains("substeps")) read_substeps(j.at("substeps"), source + ".substeps", s.substeps);
+  if (j.contains("mask")) read_mask(j.at("mask"), source + ".mask", s.mask);
   return s;
 }
 

@@ -101,6 +101,15 @@ void validate(const Rig& rig) {
               "do not sum to 1 (sum " + format_number(sum) + ")", "normalise the weights");
     }
   }
+  if (!rig.relax_mask.empty()) {
+    require(static_cast<int>(rig.relax_mask.size()) == nv, n + ": relaxation mask",
+            "has " + std::to_string(rig.relax_mask.size()) + " values for " + std::to_string(nv) + " vertices",
+            "give one value per vertex, or none");
+    for (std::size_t v = 0; v < rig.relax_mask.size(); ++v)
+      require(rig.relax_mask[v] >= 0.f && rig.relax_mask[v] <= 1.f,
+              n + ": relaxation mask of vertex " + std::to_string(v),
+              "is outside [0, 1] (" + format_number(rig.relax_mask[v]) + ")", "use 0 (rigid) .. 1 (tracked)");
+  }
   for (const Clip& c : rig.clips) {
     require(c.fps > 0 && std::isfinite(c.fps), n + ": clip '" + c.name + "'", "fps must be > 0",
             "fix the clip");

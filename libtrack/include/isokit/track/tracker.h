@@ -66,6 +66,16 @@ class IsoSurfaceTracker {
   /// \throw InputError for a wrong size or a value outside [0, 1].
   void set_relaxation_mask(std::vector<float> mask);
 
+  /// Per-vertex anchor stiffness k in [0, 1] (default all 0): the painted mask of 2014 Fig. 11 as a
+  /// term of the solve (not in the papers' form; docs/tracking.md, "Anchors"). A vertex with k > 0
+  /// is pulled toward its anchor (the `anchors` of `track`): its tangential step becomes (1 − k)
+  /// times the ARAP step plus k times the way to the anchor (Jacobi), i.e. the ARAP energy gains
+  /// `Σj wij · k / (1 − k) · ||pi − ai||²` (CG and global solves), while the projection keeps it
+  /// on its iso-value. k = 1 pins the vertex: it is placed at its anchor and is neither projected,
+  /// relaxed, smoothed nor repaired, while its neighbours see it where it is.
+  /// \throw InputError for a wrong size or a value outside [0, 1].
+  void set_anchor_stiffness(std::vector<float> stiffness);
+
   /// Vertices the fold and orientation repairs may move (1) or must leave in place (0); empty (the
   /// default): all.
   /// For callers that know where the mesh under-resolves the field (e.g. limbs of a few dozen
@@ -89,6 +99,12 @@ class IsoSurfaceTracker {
   /// \param rotations `#V` target rotations Ri, or empty for identity.
   /// \throw InputError for wrong sizes or non-finite positions / rotations.
   TrackStats track(const FieldFunction& field, const std::vector<Mat3f>& rotations, Positions& positions);
+
+  /// As above, with this call's anchors (`#V by 3`, e.g. each vertex moved rigidly by its nearest
+  /// bone) for the vertices of non-zero anchor stiffness; without them (the overload above) the
+  /// anchors are the initial positions. \throw InputError for a wrong size or non-finite anchors.
+  TrackStats track(const FieldFunction& field, const std::vector<Mat3f>& rotations, Positions& positions,
+                   const Positions& anchors);
 
   /// Per-vertex flags of the last call, in the caller's vertex order.
   const VertexFlags& flags() const;

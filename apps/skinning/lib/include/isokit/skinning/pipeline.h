@@ -26,10 +26,10 @@ namespace isokit::skinning {
 
 /// A rig from `procedural:<spec>` (procedural.h) or a file (rig_io.h, clips sampled at `fps`);
 /// heat-diffusion weights (weights.h) are computed when it has none. `warnings` (optional)
-/// receives the loader's warnings (LoadReport::warnings).
-/// \throw InputError naming the file / spec and the item.
+/// receives the loader's warnings (LoadReport::warnings); `mask` says where a file keeps the
+/// relaxation mask (SkinSetup::mask). \throw InputError naming the file / spec and the item.
 Rig open_rig(const std::string& spec, double fps = 30, const Progress& progress = {},
-             std::vector<std::string>* warnings = nullptr);
+             std::vector<std::string>* warnings = nullptr, const MaskSource& mask = {});
 
 enum class Method { kLbs, kDqs, kImplicit2013, kTracking2014 };
 

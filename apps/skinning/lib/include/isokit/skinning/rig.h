@@ -100,6 +100,11 @@ struct Rig {
   std::vector<Joint> joints;
   std::vector<Clip> clips;
   OutputMesh output;  ///< empty `to_welded`: output = welded mesh
+  /// Painted relaxation mask per welded vertex, in [0, 1] (2014 Fig. 11; docs/skinning.md,
+  /// "Rigid parts and the relaxation mask"): 0 = moved rigidly with its nearest bone, 1 = tracked,
+  /// between = pulled toward the rigid position with weight 1 − m. Empty (the default): all 1.
+  /// Read from the file (LoadOptions::mask), written to baked .glb files.
+  std::vector<float> relax_mask;
 
   int joint_index(const std::string& name) const;  ///< -1 if absent
 };

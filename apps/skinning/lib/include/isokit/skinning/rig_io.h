@@ -29,6 +29,20 @@
 namespace isokit::skinning {
 
 /// How `load_rig` reads a file. File handling only: none of these comes from the papers.
+/// Where a file keeps the painted relaxation mask (Rig::relax_mask; setup key `mask`,
+/// docs/skinning.md "Rigid parts and the relaxation mask"). Values outside [0, 1] are clamped.
+struct MaskSource {
+  /// glTF: the custom vertex attribute read as the mask (a scalar per vertex: float, or normalized
+  /// unsigned byte / short). Default "_RELAX_MASK"; empty: none.
+  std::string attribute{"_RELAX_MASK"};
+  /// Any format: the vertex-colour set (0 – 7: glTF COLOR_n, an FBX colour layer, a COLLADA set,
+  /// in the order assimp reads them; assimp 5.2 does not read the layers' names) whose `channel`
+  /// is the mask, instead of the attribute; -1 (default): none.
+  int color_set{-1};
+  /// Channel of that set: 0 = red (default), 1 = green, 2 = blue, 3 = alpha.
+  int channel{0};
+};
+
 struct LoadOptions {
   /// Clip sampling rate in frames per second, > 0 (keys are sampled linearly / by slerp).
   /// Default 30.
@@ -63,6 +77,8 @@ struct LoadOptions {
   /// Address-space limit of that child process in MiB; 0 = none. Default 8192 (the real rigs
   /// load in tens of MiB; a malformed COLLADA file grows past 4 GiB within a minute).
   std::size_t importer_memory_mib{8192};
+  /// Where the file keeps the painted relaxation mask (Rig::relax_mask).
+  MaskSource mask;
 };
 
 /// What `load_rig` found (for the CLI's summary); `warnings` lists everything it changed or
@@ -75,6 +91,7 @@ struct LoadReport {
   int max_influences{0};     ///< most influences on one vertex (after `min_weight`)
   int dropped_triangles{0};  ///< triangles degenerate after welding (kept in the output mesh)
   bool weights_from_file{false};
+  std::string mask_source;   ///< where Rig::relax_mask came from ("" = none)
   std::vector<std::string> warnings;
 };
 

@@ -45,6 +45,7 @@
 #include <optional>
 
 #include "isokit/implicit/fit.h"
+#include "isokit/skinning/rig_io.h"
 #include "isokit/operators/spec.h"
 #include "isokit/track/projector2013.h"
 #include "isokit/track/tracker.h"
@@ -70,8 +71,12 @@ struct SpecFile {
 struct JointSettings {
   /// Operator between the joint's bone and its parent's; kAuto: `SkinSetup::default_operator`.
   JointOperator op{JointOperator::kAuto};
-  /// Tracker relaxation mask of the joint's vertices (2014 §5), in [0, 1]: 0 = no tangential move,
-  /// 1 (default) = full.
+  /// Relaxation mask of the joint's vertices (2014 Fig. 11), in [0, 1], as the painted mask
+  /// (Rig::relax_mask; a vertex takes the smaller of the two): 0 = moved rigidly with the joint,
+  /// neither projected nor relaxed; 1 (default) = tracked; between = pulled toward the rigid
+  /// position with weight 1 − m (IsoSurfaceTracker::set_anchor_stiffness). Until this release 0
+  /// meant "no tangential move, still projected" (docs/skinning.md, "Rigid parts and the
+  /// relaxation mask").
   float relaxation{1.0f};
   /// The joint's own grid operator (key `joints.NAME.spec`), replacing the preset and
   /// `SkinSetup::contact_spec` / `bulge_spec`; the joint's operator must be contact or bulge.
@@ -144,6 +149,10 @@ struct SkinSetup {
   track::TrackerOptions tracker{};      ///< the 2014 tracker. Setup key `tracker`
   track::ProjectorOptions projector{};  ///< the 2013 projection. Setup key `projector`
   SubstepOptions substeps{};            ///< setup key `substeps`
+  /// Where a rig file keeps its painted relaxation mask (setup key `mask`: `attribute`,
+  /// `color_set`, `channel` "r" | "g" | "b" | "a"); read by open_rig. Default: the glTF attribute
+  /// `_RELAX_MASK`.
+  MaskSource mask{};
   /// tracking2014: put vertices that crossed their own bone's axis back on their side before each
   /// sub-step (`AxisGuard`; not in the papers; docs/skinning.md, "Decision: the axis guard").
   /// Default on; setup key `tracker.axis_guard`.
