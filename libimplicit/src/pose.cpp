@@ -11,8 +11,31 @@
 namespace isokit::implicit {
 
 Pose::Pose(const Program& program)
-    : leaves_(program.leaves()), controllers_(program.controllers()), boxes_(program.size()) {
+    : leaves_(program.leaves()),
+      scales_(program.leaves().size(), Vec3f{1.f, 1.f, 1.f}),
+      controllers_(program.controllers()),
+      boxes_(program.size()) {
   update(program);
+}
+
+namespace {
+
+void validate_scale(const Vec3f& s) {
+  for (int c = 0; c < 3; ++c)
+    require(std::isfinite(s[c]) && s[c] > 0.f, "pose leaf scale",
+            "component " + std::to_string(c) + " is " + format_number(s[c]) + ", not finite and > 0",
+            "pass a positive scale per local axis (1 = unchanged)");
+}
+
+}  // namespace
+
+// The leaf record of a posed leaf: R S⁻¹ (columns of R divided by the scale) and t.
+void Pose::place(TapeLeaf& leaf, std::size_t index, const Rigid3f& xf, const Vec3f& scale) {
+  leaf.local_to_world = xf;
+  scales_[index] = scale;
+  if (scale.x == 1.f && scale.y == 1.f && scale.z == 1.f) return;  // bit for bit the rigid pose
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) leaf.local_to_world.R.m[3 * r + c] /= scale[c];
 }
 
 void Pose::require_fits(const Program& program) const {
@@ -24,22 +47,24 @@ void Pose::require_fits(const Program& program) const {
           "make the pose from the program it is used with: Pose(program)");
 }
 
-void Pose::set_leaf_transform(const Program& program, std::size_t leaf, const Rigid3f& xf) {
+void Pose::set_leaf_transform(const Program& program, std::size_t leaf, const Rigid3f& xf, const Vec3f& scale) {
   require_fits(program);
   require(leaf < leaves_.size(), "pose leaf " + std::to_string(leaf),
           "is out of range (" + std::to_string(leaves_.size()) + " leaves)",
           "use an index into Program::leaves()");
   validate_rigid(xf, "pose leaf transform");
-  leaves_[leaf].local_to_world = xf;
+  validate_scale(scale);
+  place(leaves_[leaf], leaf, xf, scale);
   update(program);
 }
 
-void Pose::set_transform_of(const Program& program, int id, const Rigid3f& xf) {
+void Pose::set_transform_of(const Program& program, int id, const Rigid3f& xf, const Vec3f& scale) {
   require_fits(program);
   validate_rigid(xf, "pose leaf transform");
+  validate_scale(scale);
   bool any = false;
-  for (TapeLeaf& l : leaves_)
-    if (l.id == id) l.local_to_world = xf, any = true;
+  for (std::size_t k = 0; k < leaves_.size(); ++k)
+    if (leaves_[k].id == id) place(leaves_[k], k, xf, scale), any = true;
   require(any, "pose leaf id " + std::to_string(id), "tags no leaf",
           "use the id given to CompositionTree::leaf");
   update(program);
@@ -69,8 +94,13 @@ void Pose::update(const Program& program) {
   for (std::size_t i = 0; i < instr.size(); ++i) {
     const TapeInstr& in = instr[i];
     if (in.leaf >= 0) {
+      // The support moved by the forward map t + R S x = t + (R S⁻¹) S² x.
       const TapeLeaf& l = leaves_[std::size_t(in.leaf)];
-      boxes_[i] = transform_box(program.leaf_support(std::size_t(in.leaf)), l.local_to_world);
+      const Vec3f& s = scales_[std::size_t(in.leaf)];
+      Rigid3f forward = l.local_to_world;
+      for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) forward.R.m[3 * r + c] *= s[c] * s[c];
+      boxes_[i] = transform_box(program.leaf_support(std::size_t(in.leaf)), forward);
     } else {
       const Box3f b = boxes_[std::size_t(st.back())];
       st.pop_back();

@@ -9,6 +9,7 @@
 
 #include "isokit/core/error.h"
 #include "isokit/implicit/evaluators.h"
+#include "isokit/implicit/primitives.h"
 #include "isokit/implicit/skeleton.h"
 #include "isokit/operators/biharmonic.h"
 #include "isokit/operators/controller.h"
@@ -59,6 +60,13 @@ implicit::JointSetup joint_setup(const std::string& joint, JointOperator op, con
   return js;
 }
 
+/// The bend of joint `child` from `parent`: the angle of the rotation between their skinning
+/// matrices' rigid parts (0 at rest).
+double bend_between(const Affine& parent, const Affine& child) {
+  const Eigen::Matrix3d rel = rigid_part(parent).linear().transpose() * rigid_part(child).linear();
+  return std::acos(std::clamp((rel.trace() - 1.0) / 2.0, -1.0, 1.0));
+}
+
 /// Several roots: the later ones hang under the first.
 void hang_roots_under_first(std::vector<int>& parent) {
   int first_root = -1;
@@ -81,12 +89,14 @@ struct SkinField::Skeleton {
 
 SkinField::SkinField(const FittedRig& fitted, const SkinSetup& setup, TreeKind tree, const Progress& progress)
     : fitted_(&fitted), kind_(tree == TreeKind::kAuto ? TreeKind::k2014 : tree) {
-  const Skeleton sk = compressed_skeleton(setup, progress);
+  Skeleton sk = compressed_skeleton(setup, progress);
   const implicit::CompositionTree t = kind_ == TreeKind::k2013
                                           ? implicit::build_tree_2013(sk.parts, sk.joints)
                                           : implicit::build_tree_2014(sk.parts, sk.joints);
   program_ = std::make_shared<const implicit::Program>(t);
-  rest_ = std::make_shared<const implicit::Pose>(*program_);
+  auto rest = std::make_shared<implicit::Pose>(*program_);
+  pose_muscles(std::vector<Affine>(fitted.rig().joints.size(), Affine::Identity()), *rest);
+  rest_ = rest;
   pose_ = rest_;
   if (setup.bulge_gate) find_bulge_gates();
 }
@@ -114,7 +124,59 @@ SkinField::Skeleton SkinField::compressed_skeleton(const SkinSetup& setup, const
     leaf_controllers_.push_back(controller);
   }
   hang_roots_under_first(sk.parts.parent);
+  add_muscles(setup, index, progress, sk);
   return sk;
+}
+
+/// Each muscle as one more part: a unit sphere leaf under its bone's part, joined by the muscle's
+/// operator (a child part of the bone in either tree), posed as an ellipsoid (pose_muscles).
+void SkinField::add_muscles(const SkinSetup& setup, const std::vector<int>& index, const Progress& progress,
+                            Skeleton& sk) {
+  const Rig& r = fitted_->rig();
+  const std::vector<Eigen::Vector3d> joints_at = rest_joint_positions(r);
+  std::shared_ptr<const operators::GridOperator> blend_grid;
+  const auto sphere = std::make_shared<const implicit::SphereField>(Vec3f{0, 0, 0}, 1.0f);
+  for (std::size_t k = 0; k < setup.muscles.size(); ++k) {
+    const MuscleSetup& m = setup.muscles[k];
+    const std::string w = setup.source + ".muscles[" + std::to_string(k) + "] ('" + m.name + "')";
+    const int bone = r.joint_index(m.bone), driver = r.joint_index(m.driver);
+    require(bone >= 0, w + ".bone", "names no joint ('" + m.bone + "')", "give a joint of the rig");
+    require(index[std::size_t(bone)] >= 0, w + ".bone", "joint '" + m.bone + "' has no fitted part",
+            "attach the muscle to a bone with skin");
+    require(driver >= 0 && r.joints[std::size_t(driver)].parent >= 0, w + ".driver",
+            "'" + m.driver + "' is not a joint with a parent", "give the joint whose bend drives the muscle");
+    Eigen::Vector3d u = m.axis;
+    if (u.squaredNorm() == 0) {
+      for (std::size_t c = 0; c < r.joints.size() && u.squaredNorm() == 0; ++c)
+        if (r.joints[c].parent == bone) u = joints_at[c] - joints_at[std::size_t(bone)];
+      require(u.squaredNorm() > 0, w + ".axis", "is needed: the bone has no child joint to point along",
+              "give the first semi-axis's direction");
+    }
+    u.normalize();
+    const Eigen::Vector3d v = u.unitOrthogonal(), x = u.cross(v);
+    MuscleLeaf leaf{static_cast<int>(sk.parts.parent.size()), bone, driver,
+                    r.joints[std::size_t(driver)].parent, Affine::Identity(), m};
+    leaf.rest.linear() << u, v, x;
+    leaf.rest.translation() = m.center;
+    sk.parts.parent.push_back(index[std::size_t(bone)]);
+    sk.parts.parts.push_back(sphere);
+    sk.parts.transforms.push_back(to_rigid3f(leaf.rest));
+    operators::Controller unused = operators::Controller::preset(setup.bulge_controller);
+    sk.joints.push_back(joint_setup(m.name, m.op, setup, kind_, progress, unused, blend_grid));
+    joint_ops_.push_back("muscle " + m.name + " on " + m.bone + ": " +
+                         (m.op == JointOperator::kUnion ? "union" : "blend") + ", driven by " + m.driver);
+    muscles_.push_back(std::move(leaf));
+  }
+}
+
+/// Each muscle moved rigidly with its bone and scaled by its driver's bend (MuscleSetup::curve).
+void SkinField::pose_muscles(const std::vector<Affine>& skin, implicit::Pose& pose) const {
+  for (const MuscleLeaf& m : muscles_) {
+    const double f = m.setup.scale_at(bend_between(skin[std::size_t(m.driver_parent)], skin[std::size_t(m.driver)]));
+    Vec3f s;
+    for (int c = 0; c < 3; ++c) s[c] = static_cast<float>(m.setup.radii[c] * (m.setup.scaled[std::size_t(c)] ? f : 1.0));
+    pose.set_transform_of(*program_, m.id, to_rigid3f(skin[std::size_t(m.bone)] * m.rest), s);
+  }
 }
 
 void SkinField::find_bulge_gates() {
@@ -148,12 +210,11 @@ std::shared_ptr<const implicit::Pose> SkinField::pose_of(const std::vector<Affin
     pose->set_transform_of(*program_, static_cast<int>(i),
                            to_rigid3f(skin[b.joint] * to_affine(b.fit.local_to_world)));
   }
+  pose_muscles(skin, *pose);
   for (const BulgeGate& g : gates_) {
     // The bend: the rotation angle between the two joints' skinning rotations (0 at rest).
-    const Eigen::Matrix3d rel = rigid_part(skin[std::size_t(g.parent_joint)]).linear().transpose() *
-                                rigid_part(skin[std::size_t(g.child_joint)]).linear();
-    const double c = std::clamp((rel.trace() - 1.0) / 2.0, -1.0, 1.0);
-    const float cap = static_cast<float>(g.controller.eval(std::acos(c)));
+    const float cap = static_cast<float>(
+        g.controller.eval(bend_between(skin[std::size_t(g.parent_joint)], skin[std::size_t(g.child_joint)])));
     operators::ControllerTable t = g.base;
     for (float& v : t.values) v = std::min(v, cap);
     pose->set_controller(*program_, g.instruction, t);

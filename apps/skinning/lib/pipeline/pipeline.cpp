@@ -175,13 +175,25 @@ struct BakeState {
   /// The relaxation mask per vertex (`vertex_mask`; empty: all 1) and its vertices below 1.
   std::vector<float> mask;
   std::vector<int> masked;
+  std::vector<char> piece;   ///< per vertex: in a rigid piece (SkinSetup::rigid_pieces); empty: none
   track::Positions anchors;  ///< the masked vertices' rigid positions at the current sub-step
 };
 
+/// Per vertex, whether it is in a rigid piece (SkinSetup::rigid_pieces; empty when off or none).
+std::vector<char> piece_vertices(const Skinner& sk) {
+  std::vector<char> piece;
+  if (!sk.setup().rigid_pieces) return piece;
+  for (const RigidPiece& p : find_rigid_pieces(sk.rig())) {
+    piece.resize(static_cast<std::size_t>(sk.rig().rest.rows()), 0);
+    for (int v : p.vertices) piece[static_cast<std::size_t>(v)] = 1;
+  }
+  return piece;
+}
+
 /// The relaxation mask per vertex (2014 Fig. 11): the painted mask (Rig::relax_mask) and the
-/// joint's setup key, the smaller of the two, and 0 on the rigid pieces (SkinSetup::rigid_pieces).
+/// joint's setup key, the smaller of the two, and 0 on the rigid pieces (`piece`).
 /// Empty when every vertex is 1.
-std::vector<float> vertex_mask(const Skinner& sk) {
+std::vector<float> vertex_mask(const Skinner& sk, const std::vector<char>& piece) {
   const Rig& rig = sk.rig();
   const SkinSetup& setup = sk.setup();
   const std::vector<int>& partition = sk.fitted().partition();
@@ -191,21 +203,25 @@ std::vector<float> vertex_mask(const Skinner& sk) {
     mask[v] = setup.relaxation_for(rig.joints[static_cast<std::size_t>(partition[v])].name);
     if (!rig.relax_mask.empty()) mask[v] = std::min(mask[v], rig.relax_mask[v]);
   }
-  if (setup.rigid_pieces)
-    for (const RigidPiece& p : find_rigid_pieces(rig))
-      for (int v : p.vertices) mask[static_cast<std::size_t>(v)] = 0.0f;
+  for (std::size_t v = 0; v < piece.size(); ++v)
+    if (piece[v]) mask[v] = 0.0f;
   if (std::all_of(mask.begin(), mask.end(), [](float m) { return m >= 1.0f; })) mask.clear();
   return mask;
 }
 
 /// The masked vertices' rigid positions (2014 Fig. 11: "rigidly transformed according to their
-/// nearest bone"): each moved by its partition joint's skinning matrix `skin`; other rows untouched.
-void rigid_positions(const Skinner& sk, const std::vector<int>& masked, const std::vector<Affine>& skin,
-                     track::Positions& out) {
+/// nearest bone"): each moved by its partition joint's skinning matrix `skin`, a rigid piece's
+/// vertex by its piece's one transform (its DQS position in `skinned`); other rows untouched.
+void rigid_positions(const Skinner& sk, const BakeState& s, const std::vector<Affine>& skin,
+                     const track::Positions& skinned, track::Positions& out) {
   const std::vector<int>& partition = sk.fitted().partition();
   const track::Positions& rest = sk.rig().rest;
   if (out.rows() != rest.rows()) out = rest;
-  for (int v : masked) {
+  for (int v : s.masked) {
+    if (!s.piece.empty() && s.piece[static_cast<std::size_t>(v)]) {
+      out.row(v) = skinned.row(v);
+      continue;
+    }
     const Eigen::Vector3d p = rest.row(v).cast<double>().transpose();
     out.row(v) = (skin[static_cast<std::size_t>(partition[static_cast<std::size_t>(v)])] * p).cast<float>().transpose();
   }
@@ -287,7 +303,7 @@ void track_frame(const Skinner& sk, BakeState& s, const Pose& pose, std::size_t 
     if (s.masked.empty()) {
       ts = s.tracker->track(s.field->function(), rotations, s.current);
     } else {
-      rigid_positions(sk, s.masked, skin, s.anchors);
+      rigid_positions(sk, s, skin, scratch, s.anchors);
       ts = s.tracker->track(s.field->function(), rotations, s.current, s.anchors);
     }
     ++st.tracker_calls;
@@ -318,10 +334,11 @@ const std::vector<std::uint8_t>* deform(const Skinner& sk, Method method, BakeSt
       return nullptr;
     case Method::kImplicit2013: {
       dual_quaternion_blend(rig.weights, skin, rig.rest, pos, nullptr, grain);
+      const track::Positions skinned = s.masked.empty() ? track::Positions{} : pos;
       s.field->set_pose(skin);
       const track::TrackStats ts = s.projector->project(s.field->function(), pos);
       if (!s.masked.empty()) {
-        rigid_positions(sk, s.masked, skin, s.anchors);
+        rigid_positions(sk, s, skin, skinned, s.anchors);
         blend_masked(s, s.anchors, pos);
       }
       st.tracker_calls = 1;
@@ -362,7 +379,10 @@ void start_bake(Skinner& sk, Method method, const BakeOptions& options, BakeStat
   s.current = rig.rest;
   s.previous = rest;
   s.prev_skin = skinning_matrices(rig, rest);
-  if (method == Method::kTracking2014 || method == Method::kImplicit2013) s.mask = vertex_mask(sk);
+  if (method == Method::kTracking2014 || method == Method::kImplicit2013) {
+    s.piece = piece_vertices(sk);
+    s.mask = vertex_mask(sk, s.piece);
+  }
   for (std::size_t v = 0; v < s.mask.size(); ++v)
     if (s.mask[v] < 1.0f) s.masked.push_back(static_cast<int>(v));
   if (s.tracker && !s.masked.empty()) {  // 2014 Fig. 11 as a term of the tracker's solve

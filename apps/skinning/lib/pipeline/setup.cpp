@@ -47,6 +47,18 @@ JointOperator SkinSetup::operator_for(const std::string& joint, TreeKind t) cons
   return op;
 }
 
+double MuscleSetup::scale_at(double bend_rad) const {
+  const double deg = bend_rad * 180.0 / kPi;
+  if (curve.empty()) return 1.0;
+  if (deg <= curve.front().first) return curve.front().second;
+  for (std::size_t k = 1; k < curve.size(); ++k)
+    if (deg <= curve[k].first) {
+      const double t = (deg - curve[k - 1].first) / (curve[k].first - curve[k - 1].first);
+      return curve[k - 1].second + t * (curve[k].second - curve[k - 1].second);
+    }
+  return curve.back().second;
+}
+
 float SkinSetup::relaxation_for(const std::string& joint) const {
   auto it = joints.find(joint);
   return it != joints.end() ? it->second.relaxation : 1.0f;
@@ -439,6 +451,69 @@ void read_mask(const json& m, const std::string& w, MaskSource& mask) {
   mask.channel = static_cast<int>(names.find(channel[0]));
 }
 
+/// A 3-vector key of a muscle.
+Eigen::Vector3d read_vec3(const json& m, const char* key, const std::string& w) {
+  std::vector<double> v;
+  read(m, key, v, w);
+  require(v.size() == 3, w + "." + key, "must be 3 numbers (got " + m.at(key).dump() + ")", "give [x, y, z]");
+  for (double x : v) require(std::isfinite(x), w + "." + key, "has a value that is not finite", "give finite numbers");
+  return {v[0], v[1], v[2]};
+}
+
+/// One entry of section `muscles` (MuscleSetup).
+MuscleSetup read_muscle(const json& m, const std::string& w) {
+  check_keys(m, {"name", "bone", "driver", "center", "axis", "radii", "scale_axes", "curve", "operator"}, w);
+  MuscleSetup u;
+  for (const char* key : {"bone", "driver", "center", "radii"})
+    require(m.contains(key), w + "." + key, "is missing", "see docs/skinning.md, \"Muscles\"");
+  read(m, "name", u.name, w);
+  read(m, "bone", u.bone, w);
+  read(m, "driver", u.driver, w);
+  if (u.name.empty()) u.name = u.bone + " muscle";
+  u.center = read_vec3(m, "center", w);
+  if (m.contains("axis")) u.axis = read_vec3(m, "axis", w);
+  u.radii = read_vec3(m, "radii", w);
+  require(u.radii.minCoeff() > 0, w + ".radii", "must be > 0", "give the semi-axes at rest in the rig's units");
+  if (m.contains("scale_axes")) {
+    std::string axes;
+    read(m, "scale_axes", axes, w);
+    u.scaled = {false, false, false};
+    for (char c : axes) {
+      require(c == 'x' || c == 'y' || c == 'z', w + ".scale_axes", "unknown axis '" + std::string(1, c) + "'",
+              "give a subset of \"xyz\" (x: the first semi-axis)");
+      u.scaled[std::size_t(c - 'x')] = true;
+    }
+  }
+  if (m.contains("curve")) {
+    std::vector<std::vector<double>> knots;
+    read(m, "curve", knots, w);
+    require(!knots.empty(), w + ".curve", "is empty", "give [[degrees, factor], ...]");
+    u.curve.clear();
+    for (const std::vector<double>& k : knots) {
+      require(k.size() == 2 && std::isfinite(k[0]) && std::isfinite(k[1]), w + ".curve",
+              "each knot must be [degrees, factor]", "e.g. [[0, 1], [90, 1.4]]");
+      require(k[0] >= 0 && k[0] <= 180 && k[1] > 0, w + ".curve",
+              "knot [" + format_number(k[0]) + ", " + format_number(k[1]) + "] is outside [0, 180] x (0, inf)",
+              "give bends in degrees and positive factors");
+      require(u.curve.empty() || k[0] > u.curve.back().first, w + ".curve", "knots must ascend in degrees",
+              "sort the knots by bend");
+      u.curve.emplace_back(k[0], k[1]);
+    }
+  }
+  std::string op = "blend";
+  read(m, "operator", op, w);
+  require(op == "blend" || op == "union", w + ".operator", "unknown operator '" + op + "'",
+          "use \"blend\" (the default) or \"union\"");
+  u.op = op == "union" ? JointOperator::kUnion : JointOperator::kBlend;
+  return u;
+}
+
+/// Section `muscles`: a list of MuscleSetup.
+void read_muscles(const json& list, const std::string& w, std::vector<MuscleSetup>& muscles) {
+  require(list.is_array(), w, "must be a list of muscles", "see docs/skinning.md, \"Muscles\"");
+  for (std::size_t i = 0; i < list.size(); ++i) muscles.push_back(read_muscle(list[i], w + "[" + std::to_string(i) + "]"));
+}
+
 /// Section `substeps`: animation sub-stepping (SubstepOptions, 2014 §5.2).
 void read_substeps(const json& p, const std::string& w, SubstepOptions& substeps) {
   check_keys(p, {"paper_rule", "fold_rule", "min_step_rad", "max_step_rad", "max_substeps"}, w);
@@ -473,6 +548,7 @@ void apply_paper_preset(SkinSetup& s) {
   t.smoothing = {2, 3};
   t.free_vertex_angle_deg = 180.f;
   s.axis_guard = false;
+  s.rigid_pieces = false;
   s.bulge_gate = false;
   s.substeps.paper_rule = true;
   s.substeps.fold_rule = false;
@@ -489,7 +565,7 @@ SkinSetup setup_from_json(const std::string& text, const std::string& source, co
   s.source = source;
   check_keys(j,
              {"version", "preset", "tree", "default_operator", "joints", "fit", "operators", "tracker",
-              "projector", "substeps", "mask"},
+              "projector", "substeps", "mask", "muscles"},
              source);
   if (j.contains("preset")) {
     const json& p = j.at("preset");
@@ -513,6 +589,7 @@ SkinSetup setup_from_json(const std::string& text, const std::string& source, co
   if (j.contains("projector")) read_projector(j.at("projector"), source + ".projector", s.projector);
   if (j.contains("substeps")) read_substeps(j.at("substeps"), source + ".substeps", s.substeps);
   if (j.contains("mask")) read_mask(j.at("mask"), source + ".mask", s.mask);
+  if (j.contains("muscles")) read_muscles(j.at("muscles"), source + ".muscles", s.muscles);
   return s;
 }
 

@@ -27,11 +27,18 @@ class Pose {
   explicit Pose(const Program& program);
 
   /// Moves one leaf (by its position among the leaves, post-order) or every leaf tagged `id`;
-  /// the boxes and frames follow.
+  /// the boxes and frames follow. `scale` (> 0 per axis; default 1) stretches the leaf's field
+  /// along its local axes before the rigid move: the posed field is `f(S⁻¹ Rᵀ (p − t))` (e.g. a
+  /// unit sphere leaf posed as an ellipsoid, a muscle that swells; not in the papers). The leaf
+  /// record then holds `R S⁻¹` in place of R (see `leaves()`), which every evaluator — host and
+  /// device — already applies as `(R S⁻¹)ᵀ (p − t)` to points and `R S⁻¹ ∇f` to gradients: the
+  /// chain rule of the stretched field.
   /// \throw InputError for an out-of-range leaf, an id that tags no leaf, a non-rigid transform,
-  /// or a program other than this pose's (by its sizes).
-  void set_leaf_transform(const Program& program, std::size_t leaf, const Rigid3f& local_to_world);
-  void set_transform_of(const Program& program, int id, const Rigid3f& local_to_world);
+  /// a scale that is not finite and > 0, or a program other than this pose's (by its sizes).
+  void set_leaf_transform(const Program& program, std::size_t leaf, const Rigid3f& local_to_world,
+                          const Vec3f& scale = Vec3f{1.f, 1.f, 1.f});
+  void set_transform_of(const Program& program, int id, const Rigid3f& local_to_world,
+                        const Vec3f& scale = Vec3f{1.f, 1.f, 1.f});
 
   /// Replaces the controller table of inner instruction `instruction` (e.g. a controller gated
   /// by the joint's bend); a device copy made from this pose before is not updated.
@@ -45,8 +52,11 @@ class Pose {
   bool fits(const Program& program) const {
     return leaves_.size() == program.leaves().size() && boxes_.size() == program.size();
   }
-  /// The program's leaf records with this pose's transforms.
+  /// The program's leaf records with this pose's transforms (`local_to_world.R` is `R S⁻¹` for a
+  /// leaf posed with a scale, R otherwise).
   const std::vector<TapeLeaf>& leaves() const { return leaves_; }
+  /// Per leaf, the scale it was posed with (1, 1, 1 unless set).
+  const std::vector<Vec3f>& scales() const { return scales_; }
   /// Controller tables, indexed by `TapeInstr::op`.
   const std::vector<operators::ControllerTable>& controllers() const { return controllers_; }
   /// World support box of every instruction (a node's box is the union of its children's).
@@ -62,7 +72,9 @@ class Pose {
   void update(const Program& program);
   void update_frames(const Program& program);
 
+  void place(TapeLeaf& leaf, std::size_t index, const Rigid3f& xf, const Vec3f& scale);
   std::vector<TapeLeaf> leaves_;
+  std::vector<Vec3f> scales_;
   std::vector<operators::ControllerTable> controllers_;
   std::vector<Box3f> boxes_;
   std::vector<float> frames_;

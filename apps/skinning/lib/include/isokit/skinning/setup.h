@@ -39,10 +39,13 @@
 /// (operators::check_operator) and kept in the operator disk cache (operators/cache.h).
 #pragma once
 
+#include <array>
 #include <map>
 #include <string>
 
 #include <optional>
+
+#include <Eigen/Core>
 
 #include "isokit/implicit/fit.h"
 #include "isokit/skinning/rig_io.h"
@@ -101,6 +104,30 @@ struct SubstepOptions {
   int max_substeps{1000};  ///< ≥ 1: most sub-steps per animation step
 };
 
+/// A muscle (2014 Fig. 10: "an extra implicit primitive with its associated bone to mimic the
+/// contraction of a bicep by applying a scaling proportional to the arm bending angle"; setup
+/// key `muscles`, docs/skinning.md "Muscles"): an ellipsoid carried rigidly by a bone and scaled
+/// along chosen axes by a curve of one joint's bend angle, composed with its bone's part like a
+/// child part (the implicit methods; LBS and DQS ignore it).
+struct MuscleSetup {
+  std::string name;            ///< for messages and `info`
+  std::string bone;            ///< the joint whose bone carries it (a fitted part)
+  std::string driver;          ///< the joint whose bend angle (from its parent) drives the scale
+  Eigen::Vector3d center{0, 0, 0};  ///< centre at rest, in the rig's rest space
+  /// Direction of the first semi-axis at rest (normalised; the other two are completed
+  /// deterministically). Zero (default): from the bone's joint toward its first child.
+  Eigen::Vector3d axis{0, 0, 0};
+  Eigen::Vector3d radii{1, 1, 1};  ///< semi-axes at rest, rest-space units, > 0
+  std::array<bool, 3> scaled{false, true, true};  ///< axes the curve scales (key `scale_axes`, default "yz")
+  /// Scale factor (> 0) against the bend in degrees, knots ascending in [0, 180]: linear between
+  /// knots, constant outside (key `curve`: [[degrees, factor], ...]). Default: 1 everywhere.
+  std::vector<std::pair<double, double>> curve{{0.0, 1.0}};
+  JointOperator op{JointOperator::kBlend};  ///< "blend" (2013 gradient blend, default) or "union"
+
+  /// The curve at `bend_rad` radians.
+  double scale_at(double bend_rad) const;
+};
+
 struct SkinSetup {
   std::string source{"defaults"};  ///< file name for messages
   /// Composition tree; kAuto = each method's paper (2013 tree for implicit2013, 2014 tree for
@@ -153,16 +180,19 @@ struct SkinSetup {
   /// `color_set`, `channel` "r" | "g" | "b" | "a"); read by open_rig. Default: the glTF attribute
   /// `_RELAX_MASK`.
   MaskSource mask{};
+  /// Muscles (2014 Fig. 10; setup key `muscles`). Default: none.
+  std::vector<MuscleSetup> muscles;
   /// tracking2014: put vertices that crossed their own bone's axis back on their side before each
   /// sub-step (`AxisGuard`; not in the papers; docs/skinning.md, "Decision: the axis guard").
   /// Default on; setup key `tracker.axis_guard`.
   bool axis_guard{true};
   /// implicit2013 and tracking2014: the rig's rigid pieces (`find_rigid_pieces`: components whose
-  /// every vertex has the same influences) move with their transform exactly (their DQS
-  /// position) instead of being projected and relaxed; their fields stay in the composition, so
-  /// the skin that touches them still meets them. Not in the papers. Default off (not yet
-  /// measured on the evaluation); setup key `tracker.rigid_pieces`.
-  bool rigid_pieces{false};
+  /// every vertex has the same influences) take the relaxation mask 0 — they move with their
+  /// bone's transform exactly instead of being projected and relaxed; their fields stay in the
+  /// composition, so the skin that touches them still meets them. Not in the papers (the paper
+  /// preset turns it off). Default on (docs/decisions/rigid-pieces-on-by-default.md: 66 → 77
+  /// criterion checks on `make eval`); setup key `tracker.rigid_pieces`.
+  bool rigid_pieces{true};
   /// tracking2014: the fold repair (TrackerOptions::fold_repair) leaves alone the vertices of
   /// parts with fewer vertices than this, ≥ 0 (0: no limit): a fold repair region holds 20 – 30
   /// vertices, so smaller parts are under-resolved and smoothing would erase them. Not in the

@@ -30,8 +30,9 @@ class SkinField {
   SkinField(const FittedRig& fitted, const SkinSetup& setup, TreeKind tree, const Progress& progress = {});
 
   /// The pose of skinning matrices `skin` (one per joint): every primitive moved by the rigid
-  /// part of its joint's skinning matrix, and (bulge gate, SkinSetup::bulge_gate) each bulge
-  /// node's controller capped by its joint's bend. \throw InputError for a wrong matrix count.
+  /// part of its joint's skinning matrix, each muscle (SkinSetup::muscles) moved with its bone
+  /// and scaled by its driver's bend, and (bulge gate, SkinSetup::bulge_gate) each bulge node's
+  /// controller capped by its joint's bend. \throw InputError for a wrong matrix count.
   std::shared_ptr<const implicit::Pose> pose_of(const std::vector<Affine>& skin) const;
   /// Makes `pose_of(skin)` the current pose (functions made before keep theirs).
   void set_pose(const std::vector<Affine>& skin);
@@ -60,8 +61,18 @@ class SkinField {
     operators::ControllerTable base;
     operators::Controller controller;  ///< the node's own d_b (preset or spec file), for the cap
   };
+  /// A muscle's leaf (SkinSetup::muscles): carried by `bone`, scaled by `driver`'s bend.
+  struct MuscleLeaf {
+    int id;                    ///< leaf id in the program
+    int bone, driver, driver_parent;  ///< rig joints (skinning-matrix indices)
+    Affine rest;               ///< unit-sphere frame -> rest space (rotation + centre)
+    MuscleSetup setup;
+  };
   struct Skeleton;
   Skeleton compressed_skeleton(const SkinSetup& setup, const Progress& progress);
+  void add_muscles(const SkinSetup& setup, const std::vector<int>& index, const Progress& progress,
+                   Skeleton& sk);
+  void pose_muscles(const std::vector<Affine>& skin, implicit::Pose& pose) const;
   void find_bulge_gates();
 
   const FittedRig* fitted_;
@@ -71,6 +82,7 @@ class SkinField {
   std::vector<int> joint_of_leaf_id_;  ///< leaf id (compressed bone) -> rig joint
   std::vector<std::string> joint_ops_;
   std::vector<BulgeGate> gates_;
+  std::vector<MuscleLeaf> muscles_;
   /// Per leaf id: the controller of the joint's grid operator (the bulge preset for other joints).
   std::vector<operators::Controller> leaf_controllers_;
 };
