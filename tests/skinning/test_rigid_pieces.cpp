@@ -195,3 +195,55 @@ TEST_CASE("relaxation mask: a value between 0 and 1 pulls toward the rigid posit
     CHECK(last <= 1e-6 * sc.diag);
   }
 }
+
+TEST_CASE("rigid pieces: a piece the skin runs into does not give way",
+          "[skinning][rigid][unit]") {
+  // A block on Bone0 beside the elbow, off the skin at rest: bending Bone1 by 90° about x swings
+  // the forearm (+y) toward +z, through where the block is. The block's vertices weigh on Bone0
+  // alone: a rigid piece, whose field is part of Bone0's.
+  Rig rig = make_cylinder();
+  const auto skin_vertices = rig.rest.rows();
+  const Eigen::Vector3f lo(-0.12f, 0.62f, 0.34f), hi(0.12f, 0.9f, 0.6f);
+  const auto base = static_cast<int>(rig.rest.rows());
+  rig.rest.conservativeResize(base + 8, 3);
+  for (int c = 0; c < 8; ++c)
+    rig.rest.row(base + c) << ((c & 1) ? hi.x() : lo.x()), ((c & 2) ? hi.y() : lo.y()), ((c & 4) ? hi.z() : lo.z());
+  const int quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  const auto t0 = rig.triangles.rows();
+  rig.triangles.conservativeResize(t0 + 12, 3);
+  for (int q = 0; q < 6; ++q) {
+    rig.triangles.row(t0 + 2 * q) << base + quads[q][0], base + quads[q][1], base + quads[q][2];
+    rig.triangles.row(t0 + 2 * q + 1) << base + quads[q][0], base + quads[q][2], base + quads[q][3];
+  }
+  for (int c = 0; c < 8; ++c) {
+    rig.weights.joints.push_back(0);
+    rig.weights.weights.push_back(1.f);
+    rig.weights.offsets.push_back(static_cast<int>(rig.weights.joints.size()));
+  }
+  REQUIRE(find_rigid_pieces(rig).size() == 1);
+  const std::vector<Pose> poses = bend_animation(rig, {parse_bend("Bone1:x:90", rig)}, 21);
+  BakeOptions quick;
+  quick.self_intersections = false;
+  // Forearm skin vertices inside the block (shrunk by 1 % of its size: on its face is a touch).
+  auto inside = [&](const isokit::track::Positions& p) {
+    const Eigen::Vector3f pad = 0.01f * (hi - lo);
+    int n = 0;
+    for (Eigen::Index v = 0; v < skin_vertices; ++v) {
+      const Eigen::Vector3f q = p.row(v).transpose();
+      if (rig.rest(v, 1) > 1.0f && (q.array() > (lo + pad).array()).all() && (q.array() < (hi - pad).array()).all()) ++n;
+    }
+    return n;
+  };
+  const BakeResult dqs = Skinner(rig).bake(Method::kDqs, poses, quick);
+  const BakeResult trk = Skinner(rig).bake(Method::kTracking2014, poses, quick);
+  INFO("forearm vertices inside the block at 90 degrees: dqs " << inside(dqs.frames[10]) << ", tracking2014 "
+                                                               << inside(trk.frames[10]));
+  CHECK(inside(dqs.frames[10]) > 10);  // the forearm does reach the block
+  // Known limit (docs/skinning.md, "Rigid parts and the relaxation mask"): the tracked skin does
+  // not stop on the block either — its field is part of Bone0's but barely above the iso-value
+  // inside so small a piece (0.52 at its centre), and the contact between the two parts does not
+  // hold the forearm there (28 vertices inside under DQS, 43 tracked when measured).
+  // The block stays exactly where its bone holds it.
+  for (std::size_t f = 0; f < poses.size(); ++f)
+    CHECK((trk.frames[f].bottomRows(8) - rig.rest.bottomRows(8)).cwiseAbs().maxCoeff() == 0.f);
+}
