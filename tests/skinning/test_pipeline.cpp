@@ -10,6 +10,7 @@
 #include "isokit/skinning/animation.h"
 #include "isokit/skinning/deform.h"
 #include "isokit/skinning/pipeline.h"
+#include "isokit/skinning/procedural.h"
 #include "isokit/skinning/report.h"
 #include "pipeline_fixture.h"
 
@@ -470,4 +471,37 @@ TEST_CASE("pipeline: an open mesh is reported not closed and has no volume", "[s
   REQUIRE(j["components"].size() == 1);
   CHECK(j["components"][0]["border_edges"] == segments);
   CHECK(j["methods"]["dqs"]["worst"]["volume_ratio"].is_null());
+}
+
+TEST_CASE("pipeline: scale keys are followed by DQS and by the implicit methods' fields",
+          "[skinning][pipeline][scale][unit]") {
+  // The cylinder's forearm (Bone1) scaled up to 1.3 times over 7 frames, uniformly: the skin of
+  // the forearm's far end (one influence) must end where the scaled bone puts it (LBS is exact
+  // there), not at its unscaled length.
+  const Rig rig = make_cylinder();
+  const Pose rest = rest_pose(rig);
+  std::vector<Pose> poses;
+  for (int f = 0; f < 7; ++f) {
+    Pose p = rest;
+    p[1] = p[1] * Affine(Eigen::Scaling(1.0 + 0.05 * f));
+    poses.push_back(p);
+  }
+  BakeOptions quick;
+  quick.self_intersections = false;
+  Skinner sk(rig);
+  const BakeResult lbs = sk.bake(Method::kLbs, poses, quick);
+  const double diag = (rig.rest.colwise().maxCoeff() - rig.rest.colwise().minCoeff()).cast<double>().norm();
+  std::vector<int> tip;
+  for (Eigen::Index v = 0; v < rig.rest.rows(); ++v)
+    if (rig.rest(v, 1) > 1.7f) tip.push_back(static_cast<int>(v));
+  REQUIRE(tip.size() > 50);
+  auto off = [&](const BakeResult& r) {
+    double d = 0;
+    for (int v : tip) d = std::max(d, double((r.frames.back().row(v) - lbs.frames.back().row(v)).norm()));
+    return d / diag;
+  };
+  CHECK(off(sk.bake(Method::kDqs, poses, quick)) <= 1e-6);
+  // Unscaled, the tip would stay 0.3 × 0.7 = 0.21 (8 % of the diagonal) short.
+  CHECK(off(sk.bake(Method::kImplicit2013, poses, quick)) <= 5e-3);
+  CHECK(off(sk.bake(Method::kTracking2014, poses, quick)) <= 5e-3);
 }

@@ -21,6 +21,10 @@ Affine rigid_part(const Affine& a) {
   return r;
 }
 
+Eigen::Matrix3d stretch_part(const Affine& a) {
+  return rigid_part(a).linear().transpose() * a.linear();
+}
+
 Rigid3f to_rigid3f(const Affine& a) {
   const Affine r = rigid_part(a);
   Rigid3f x;
@@ -103,6 +107,13 @@ void dual_quaternion_blend(const SkinWeights& w, const std::vector<Affine>& skin
   if (rotations) rotations->resize(static_cast<std::size_t>(rest.rows()));
   std::vector<Dq> dq(skin.size());
   for (std::size_t j = 0; j < skin.size(); ++j) dq[j] = to_dq(skin[j]);
+  // The stretches (scale keys), kept only when some matrix has one.
+  std::vector<Eigen::Matrix3d> stretch(skin.size());
+  bool stretched = false;
+  for (std::size_t j = 0; j < skin.size(); ++j) {
+    stretch[j] = stretch_part(skin[j]);
+    stretched = stretched || (stretch[j] - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() > kStretchTolerance;
+  }
   parallel_for(static_cast<std::size_t>(rest.rows()), grain, [&](std::size_t b, std::size_t e) {
     for (std::size_t v = b; v < e; ++v) {
       // Pivot: the largest weight (antipodality reference).
@@ -124,13 +135,20 @@ void dual_quaternion_blend(const SkinWeights& w, const std::vector<Affine>& skin
       const Eigen::Vector4d rc(r[0], -r[1], -r[2], -r[3]);
       const Eigen::Vector4d tq = 2.0 * qmul(d, rc);
       const Eigen::Matrix3d rot = Eigen::Quaterniond(r[0], r[1], r[2], r[3]).toRotationMatrix();
-      const Eigen::Vector3d p(rest(v, 0), rest(v, 1), rest(v, 2));
+      Eigen::Vector3d p(rest(v, 0), rest(v, 1), rest(v, 2));
+      Eigen::Matrix3d linear = rot;
+      if (stretched) {
+        Eigen::Matrix3d blend = Eigen::Matrix3d::Zero();
+        for (int k = w.offsets[v]; k < w.offsets[v + 1]; ++k) blend += double(w.weights[k]) * stretch[w.joints[k]];
+        p = blend * p;
+        linear = rot * blend;
+      }
       const Eigen::Vector3d q = rot * p + Eigen::Vector3d(tq[1], tq[2], tq[3]);
       out.row(static_cast<Eigen::Index>(v)) = q.cast<float>().transpose();
       if (rotations) {
         Mat3f& R = (*rotations)[v];
         for (int i = 0; i < 3; ++i)
-          for (int c = 0; c < 3; ++c) R.m[i * 3 + c] = static_cast<float>(rot(i, c));
+          for (int c = 0; c < 3; ++c) R.m[i * 3 + c] = static_cast<float>(linear(i, c));
       }
     }
   });

@@ -67,6 +67,16 @@ double bend_between(const Affine& parent, const Affine& child) {
   return std::acos(std::clamp((rel.trace() - 1.0) / 2.0, -1.0, 1.0));
 }
 
+/// The scale of a part's leaf under skinning matrix `m` (a clip's scale keys): the stretch of
+/// `m`, seen in the leaf's frame `leaf` (rigid), its diagonal (a shear is dropped); exactly 1 for
+/// a rigid `m` (within kStretchTolerance).
+Vec3f leaf_scale(const Affine& m, const Affine& leaf) {
+  const Eigen::Matrix3d p = stretch_part(m);
+  if ((p - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() <= kStretchTolerance) return Vec3f{1.f, 1.f, 1.f};
+  const Eigen::Matrix3d local = leaf.linear().transpose() * p * leaf.linear();
+  return Vec3f{float(local(0, 0)), float(local(1, 1)), float(local(2, 2))};
+}
+
 /// Several roots: the later ones hang under the first.
 void hang_roots_under_first(std::vector<int>& parent) {
   int first_root = -1;
@@ -207,8 +217,9 @@ std::shared_ptr<const implicit::Pose> SkinField::pose_of(const std::vector<Affin
   auto pose = std::make_shared<implicit::Pose>(*rest_);
   for (std::size_t i = 0; i < joint_of_leaf_id_.size(); ++i) {
     const BonePart& b = fitted_->bones()[joint_of_leaf_id_[i]];
-    pose->set_transform_of(*program_, static_cast<int>(i),
-                           to_rigid3f(skin[b.joint] * to_affine(b.fit.local_to_world)));
+    const Affine leaf = to_affine(b.fit.local_to_world);
+    pose->set_transform_of(*program_, static_cast<int>(i), to_rigid3f(skin[b.joint] * leaf),
+                           leaf_scale(skin[b.joint], leaf));
   }
   pose_muscles(skin, *pose);
   for (const BulgeGate& g : gates_) {

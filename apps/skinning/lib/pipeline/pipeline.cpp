@@ -270,12 +270,17 @@ std::unique_ptr<track::IsoSurfaceTracker> make_tracker(const Skinner& sk, const 
 }
 
 /// Stage 1 of a 2014 sub-step (2014 §5): each vertex moved by its partition joint's rigid delta
-/// from the last sub-step's matrices to `skin`.
+/// from the last sub-step's matrices to `skin` (the whole delta where the joint's scale changed).
 void move_by_rigid_deltas(const std::vector<int>& partition, const std::vector<Affine>& prev_skin,
                           const std::vector<Affine>& skin, std::size_t grain, track::Positions& current) {
   std::vector<Eigen::Matrix<double, 3, 4>> delta(skin.size());
-  for (std::size_t j = 0; j < skin.size(); ++j)
-    delta[j] = (rigid_part(skin[j]) * rigid_part(prev_skin[j]).inverse()).matrix().topRows<3>();
+  for (std::size_t j = 0; j < skin.size(); ++j) {
+    // A joint whose stretch changed (scale keys) moves its vertices by the whole delta.
+    const bool rescaled =
+        (stretch_part(skin[j]) - stretch_part(prev_skin[j])).cwiseAbs().maxCoeff() > kStretchTolerance;
+    delta[j] = rescaled ? (skin[j] * prev_skin[j].inverse()).matrix().topRows<3>()
+                        : (rigid_part(skin[j]) * rigid_part(prev_skin[j]).inverse()).matrix().topRows<3>();
+  }
   parallel_for(static_cast<std::size_t>(current.rows()), grain, [&](std::size_t b, std::size_t e) {
     for (std::size_t v = b; v < e; ++v) {
       const Eigen::Vector4d p(current(v, 0), current(v, 1), current(v, 2), 1.0);

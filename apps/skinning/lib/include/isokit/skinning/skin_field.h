@@ -30,7 +30,8 @@ class SkinField {
   SkinField(const FittedRig& fitted, const SkinSetup& setup, TreeKind tree, const Progress& progress = {});
 
   /// The pose of skinning matrices `skin` (one per joint): every primitive moved by the rigid
-  /// part of its joint's skinning matrix, each muscle (SkinSetup::muscles) moved with its bone
+  /// part of its joint's skinning matrix and stretched by the rest (a clip's scale keys: the
+  /// stretch seen in the primitive's frame, its shear dropped), each muscle (SkinSetup::muscles) moved with its bone
   /// and scaled by its driver's bend, and (bulge gate, SkinSetup::bulge_gate) each bulge node's
   /// controller capped by its joint's bend. \throw InputError for a wrong matrix count.
   std::shared_ptr<const implicit::Pose> pose_of(const std::vector<Affine>& skin) const;
