@@ -247,3 +247,38 @@ TEST_CASE("rigid pieces: a piece the skin runs into does not give way",
   for (std::size_t f = 0; f < poses.size(); ++f)
     CHECK((trk.frames[f].bottomRows(8) - rig.rest.bottomRows(8)).cwiseAbs().maxCoeff() == 0.f);
 }
+
+TEST_CASE("small parts: their relaxation mask pulls them toward DQS, 0 skins them by DQS",
+          "[skinning][rigid][mask][unit]") {
+  MaskScene sc;
+  const BakeResult dqs = Skinner(sc.rig).bake(Method::kDqs, sc.poses, sc.quick);
+  auto from_dqs = [&](const BakeResult& r) {
+    double d = 0;
+    for (std::size_t f = 0; f < sc.poses.size(); ++f) d = std::max(d, double((r.frames[f] - dqs.frames[f]).cwiseAbs().maxCoeff()));
+    return d / sc.diag;
+  };
+  for (const Method m : {Method::kTracking2014, Method::kImplicit2013}) {
+    INFO(to_string(m));
+    double last = std::numeric_limits<double>::infinity();
+    for (const float value : {1.0f, 0.5f, 0.0f}) {
+      SkinSetup setup;
+      setup.small_part_mask = value;
+      setup.small_part_vertices = 1 << 30;  // every part counts as small
+      const double d = from_dqs(Skinner(sc.rig, setup).bake(m, sc.poses, sc.quick));
+      INFO("mask " << value << ": " << d << " of the diagonal from DQS");
+      CHECK(d < last);
+      last = d;
+    }
+    CHECK(last == 0.0);  // pinned at their DQS positions
+    // Parts at or above the size are left alone.
+    SkinSetup none;
+    none.small_part_mask = 0.0f;
+    none.small_part_vertices = 10;
+    CHECK(from_dqs(Skinner(sc.rig, none).bake(m, sc.poses, sc.quick)) ==
+          from_dqs(Skinner(sc.rig).bake(m, sc.poses, sc.quick)));
+  }
+  CHECK_THROWS_WITH(setup_from_json(R"({"tracker": {"small_part_mask": 1.5}})", "s.json"),
+                    Catch::Contains("s.json.tracker.small_part_mask"));
+  CHECK_THROWS_WITH(setup_from_json(R"({"tracker": {"small_part_vertices": -1}})", "s.json"),
+                    Catch::Contains("small_part_vertices"));
+}

@@ -179,12 +179,24 @@ struct BakeState {
   track::Positions anchors;  ///< the masked vertices' rigid positions at the current sub-step
 };
 
-/// Per vertex, whether it is in a rigid piece (SkinSetup::rigid_pieces; empty when off or none).
+/// Per vertex, whether it is anchored at its DQS position when masked: in a rigid piece
+/// (SkinSetup::rigid_pieces; 1) or in a part too small for its field (SkinSetup::small_part_mask;
+/// 2). Empty when there is none.
 std::vector<char> piece_vertices(const Skinner& sk) {
   std::vector<char> piece;
-  if (!sk.setup().rigid_pieces) return piece;
+  const SkinSetup& setup = sk.setup();
+  const std::size_t nv = static_cast<std::size_t>(sk.rig().rest.rows());
+  if (setup.small_part_mask < 1.0f) {
+    const std::vector<int>& partition = sk.fitted().partition();
+    for (std::size_t v = 0; v < nv; ++v)
+      if (sk.fitted().bones()[static_cast<std::size_t>(partition[v])].vertices < setup.small_part_vertices) {
+        piece.resize(nv, 0);
+        piece[v] = 2;
+      }
+  }
+  if (!setup.rigid_pieces) return piece;
   for (const RigidPiece& p : find_rigid_pieces(sk.rig())) {
-    piece.resize(static_cast<std::size_t>(sk.rig().rest.rows()), 0);
+    piece.resize(nv, 0);
     for (int v : p.vertices) piece[static_cast<std::size_t>(v)] = 1;
   }
   return piece;
@@ -204,14 +216,18 @@ std::vector<float> vertex_mask(const Skinner& sk, const std::vector<char>& piece
     if (!rig.relax_mask.empty()) mask[v] = std::min(mask[v], rig.relax_mask[v]);
   }
   for (std::size_t v = 0; v < piece.size(); ++v)
-    if (piece[v]) mask[v] = 0.0f;
+    if (piece[v] == 1)
+      mask[v] = 0.0f;
+    else if (piece[v] == 2)
+      mask[v] = std::min(mask[v], setup.small_part_mask);
   if (std::all_of(mask.begin(), mask.end(), [](float m) { return m >= 1.0f; })) mask.clear();
   return mask;
 }
 
 /// The masked vertices' rigid positions (2014 Fig. 11: "rigidly transformed according to their
 /// nearest bone"): each moved by its partition joint's skinning matrix `skin`, a rigid piece's
-/// vertex by its piece's one transform (its DQS position in `skinned`); other rows untouched.
+/// vertex by its piece's one transform and a small part's vertex as DQS moves it (its position in
+/// `skinned`); other rows untouched.
 void rigid_positions(const Skinner& sk, const BakeState& s, const std::vector<Affine>& skin,
                      const track::Positions& skinned, track::Positions& out) {
   const std::vector<int>& partition = sk.fitted().partition();

@@ -359,6 +359,8 @@ void read_tracker(const json& t, const std::string& w, SkinSetup& s) {
               "fold_repair_rings",
               "fold_repair_max_fraction",
               "fold_repair_min_part_vertices",
+              "small_part_mask",
+              "small_part_vertices",
               "orientation_repair_rounds",
               "orientation_repair_max_move",
               "orientation_repair_max_outward_move",
@@ -396,6 +398,11 @@ void read_tracker(const json& t, const std::string& w, SkinSetup& s) {
   read(t, "lazy_evaluation", s.tracker.lazy_evaluation, w);
   read(t, "axis_guard", s.axis_guard, w);
   read(t, "rigid_pieces", s.rigid_pieces, w);
+  read(t, "small_part_mask", s.small_part_mask, w);
+  require(s.small_part_mask >= 0.f && s.small_part_mask <= 1.f, w + ".small_part_mask",
+          "must be in [0, 1] (got " + format_number(s.small_part_mask) + ")", "1 = off, 0 = DQS on small parts");
+  read(t, "small_part_vertices", s.small_part_vertices, w);
+  require(s.small_part_vertices >= 0, w + ".small_part_vertices", "must be >= 0", "use e.g. 100");
   read(t, "chebyshev_rho", s.tracker.chebyshev_rho, w);
   require(std::isfinite(s.tracker.chebyshev_rho) && s.tracker.chebyshev_rho >= 0.f &&
               s.tracker.chebyshev_rho < 1.f,

@@ -200,6 +200,13 @@ struct SkinSetup {
   /// repairs on CesiumMan's 50 – 90-vertex parts made its walk's edge spikes). Default 100; setup
   /// key `tracker.fold_repair_min_part_vertices`.
   int fold_repair_min_part_vertices{100};
+  /// implicit2013 and tracking2014: the relaxation mask (docs/skinning.md, "Rigid parts and the
+  /// relaxation mask") of the vertices of parts with fewer than `small_part_vertices` vertices,
+  /// which the part fields under-resolve; their anchors are their DQS positions. In [0, 1]; 1
+  /// (default) = off, 0 = such parts are skinned by DQS. Not in the papers. Setup keys
+  /// `tracker.small_part_mask`, `tracker.small_part_vertices` (≥ 0; default 100).
+  float small_part_mask{1.0f};
+  int small_part_vertices{100};
 
   /// The operator chosen for `joint` (resolving kAuto with the tree kind).
   JointOperator operator_for(const std::string& joint, TreeKind tree) const;
