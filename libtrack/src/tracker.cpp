@@ -100,8 +100,13 @@ void IsoSurfaceTracker::set_anchor_stiffness(std::vector<float> stiffness) {
     any = any || stiffness[i] > 0.f;
   }
   if (!any) stiffness.clear();
-  m.anchor_k = m.order.empty() || stiffness.empty() ? std::move(stiffness) : detail::permuted(stiffness, m.order);
-  m.global.reset();  // pinned vertices have no unknowns
+  if (!m.order.empty() && !stiffness.empty()) stiffness = detail::permuted(stiffness, m.order);
+  // Pinned vertices have no unknowns in the global solve: its factor follows the pinned set.
+  auto pinned = [](const std::vector<float>& k, std::size_t i) { return !k.empty() && k[i] >= 1.f; };
+  bool same = true;
+  for (std::size_t i = 0; i < m.mask.size() && same; ++i) same = pinned(stiffness, i) == pinned(m.anchor_k, i);
+  m.anchor_k = std::move(stiffness);
+  if (!same) m.global.reset();
 }
 
 void IsoSurfaceTracker::set_fold_repair_mask(std::vector<std::uint8_t> mask) {

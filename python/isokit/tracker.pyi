@@ -20,6 +20,8 @@ class Tracker:
         positions: npt.ArrayLike,
         rotations: Optional[npt.ArrayLike] = None,
         mask: Optional[npt.ArrayLike] = None,
+        anchors: Optional[npt.ArrayLike] = None,
+        stiffness: Optional[npt.ArrayLike] = None,
     ) -> Tuple[npt.NDArray[np.float32], Dict[str, Any]]: ...
     @property
     def flags(self) -> Dict[str, npt.NDArray[Any]]: ...

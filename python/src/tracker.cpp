@@ -176,7 +176,7 @@ class PyTracker {
   }
 
   py::tuple track(const py::object& field, const py::object& positions, const py::object& rotations,
-                  const py::object& mask) {
+                  const py::object& mask, const py::object& anchors, const py::object& stiffness) {
     Positions p = positions_of(positions, "positions", rest_.rows());
     std::vector<Mat3f> rot;
     if (!rotations.is_none()) {
@@ -199,11 +199,23 @@ class PyTracker {
     } else {
       tracker_->set_relaxation_mask(std::vector<float>(static_cast<std::size_t>(rest_.rows()), 1.0f));
     }
+    // The anchors of this call: stiffness (V,) in [0, 1] toward anchors (V, 3) (default: the
+    // initial positions); none: no anchor.
+    std::vector<float> k(static_cast<std::size_t>(rest_.rows()), 0.0f);
+    if (!stiffness.is_none()) {
+      const auto s = real_array<float>(stiffness, "stiffness", {rest_.rows()});
+      k.assign(s.data(), s.data() + s.size());
+    } else {
+      require(anchors.is_none(), "argument 'anchors'", "given without 'stiffness'",
+              "pass stiffness (V,) in [0, 1]: how strongly each vertex is pulled to its anchor");
+    }
+    tracker_->set_anchor_stiffness(std::move(k));
+    const Positions a = anchors.is_none() ? p : positions_of(anchors, "anchors", rest_.rows());
     Released released;
     PythonFieldCost cost;
     const FieldFunction f = field_function(field, released, cost);
     TrackStats stats;
-    released.run([&] { stats = tracker_->track(f, rot, p); });
+    released.run([&] { stats = tracker_->track(f, rot, p, a); });
     return py::make_tuple(to_array(p), stats_dict(stats, cost));
   }
 
@@ -251,11 +263,15 @@ void bind_tracker(py::module_& m) {
            "rest (V, 3), triangles (F, 3) int, iso (V,) target values (sample_iso_values); options as "
            "keywords (sigma, max_iterations, tolerance, ... of TrackerOptions).")
       .def("track", &PyTracker::track, py::arg("field"), py::arg("positions"),
-           py::arg("rotations") = py::none(), py::arg("mask") = py::none(),
+           py::arg("rotations") = py::none(), py::arg("mask") = py::none(), py::arg("anchors") = py::none(),
+           py::arg("stiffness") = py::none(),
            "Tracks `field` (an isokit.fields.Field, or a callable f(points (N, 3) float32) -> (values "
            "(N,), gradients (N, 3)[, contact (N,)]) called from one thread with every point of an "
            "evaluation) from the initial `positions` (V, 3); rotations (V, 3, 3) are the ARAP targets "
-           "(default identity), mask (V,) the relaxation mask. Returns (positions, statistics dict).")
+           "(default identity), mask (V,) the relaxation mask (a scale of the tangential step); "
+           "stiffness (V,) in [0, 1] pulls each vertex toward its anchor (V, 3; default: the initial "
+           "positions), 1 pins it there (2014 Fig. 11 as a term of the solve). Returns (positions, "
+           "statistics dict).")
       .def_property_readonly("flags", &PyTracker::flags,
                              "Per-vertex flags of the last call (contact, lost, beta, free).");
 }

@@ -134,3 +134,27 @@ def test_the_mask_holds_masked_vertices_in_their_tangent_plane_and_applies_per_c
         t.track(ball(1.0), rest, mask=np.zeros(3))
     with pytest.raises(isokit.InputError):
         t.track(ball(1.0), rest, mask=np.full(len(rest), 2.0))
+
+
+def test_anchors_pull_vertices_and_pin_them_at_stiffness_one():
+    rest, tris = uv_sphere()
+    t = tracker.Tracker(rest, tris, np.full(len(rest), 0.5, np.float32))
+    a = 0.3
+    rz = np.array([[np.cos(a), -np.sin(a), 0], [np.sin(a), np.cos(a), 0], [0, 0, 1]], np.float32)
+    rotations = np.repeat(rz[None], len(rest), axis=0)
+    free, _ = t.track(ball(1.0), rest, rotations=rotations)
+    # Pinned (stiffness 1) at anchors that are the rest positions: the top cap stays exactly put
+    # while the rest slides round z.
+    cap = rest[:, 2] > 0.5
+    k = np.where(cap, 1.0, 0.0)
+    held, _ = t.track(ball(1.0), rest, rotations=rotations, stiffness=k, anchors=rest)
+    assert np.array_equal(held[cap], rest[cap])
+    assert np.abs(held[~cap] - rest[~cap]).max() > 1e-3
+    # A pull between: closer to the anchors than free, farther than pinned.
+    half, _ = t.track(ball(1.0), rest, rotations=rotations, stiffness=np.full(len(rest), 0.7))
+    d_free, d_half = np.abs(free - rest).max(), np.abs(half - rest).max()
+    assert 0 < d_half < d_free
+    with pytest.raises(isokit.InputError, match="anchors"):
+        t.track(ball(1.0), rest, anchors=rest)
+    with pytest.raises(isokit.InputError, match="anchor stiffness vertex 0"):
+        t.track(ball(1.0), rest, stiffness=np.full(len(rest), 1.5))
