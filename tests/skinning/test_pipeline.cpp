@@ -505,3 +505,26 @@ TEST_CASE("pipeline: scale keys are followed by DQS and by the implicit methods'
   CHECK(off(sk.bake(Method::kImplicit2013, poses, quick)) <= 5e-3);
   CHECK(off(sk.bake(Method::kTracking2014, poses, quick)) <= 5e-3);
 }
+
+TEST_CASE("pipeline: a frame baker gives bake's frames, one call per frame", "[skinning][pipeline][unit]") {
+  const Rig rig = make_cylinder();
+  const std::vector<Pose> poses = bend_animation(rig, {parse_bend("Bone1:x:100", rig)}, 9);
+  BakeOptions quick;
+  quick.self_intersections = false;
+  Skinner sk(rig);
+  for (const Method m : all_methods()) {
+    INFO(to_string(m));
+    const BakeResult whole = sk.bake(m, poses, quick);
+    FrameBaker baker(sk, m, quick);
+    CHECK(baker.method() == m);
+    for (std::size_t f = 0; f < poses.size(); ++f) {
+      FrameStats st;
+      const isokit::track::Positions p = baker.next(poses[f], &st);
+      REQUIRE(p == whole.frames[f]);
+      CHECK(st.metrics.edge_distortion_max == whole.stats[f].metrics.edge_distortion_max);
+      CHECK((baker.contacts() != nullptr) == (m == Method::kTracking2014 || m == Method::kImplicit2013));
+    }
+  }
+  FrameBaker baker(sk, Method::kTracking2014, quick);
+  CHECK_THROWS_AS(baker.next(Pose(1)), isokit::InputError);
+}

@@ -433,30 +433,66 @@ FrameMetrics measure_frame(Skinner& sk, const Pose& pose, const track::Positions
 
 }  // namespace
 
+struct FrameBaker::State {
+  Skinner* sk{nullptr};
+  Method method{Method::kDqs};
+  BakeOptions options;
+  BakeState bake;
+  const std::vector<std::uint8_t>* contact{nullptr};
+};
+
+FrameBaker::FrameBaker(Skinner& skinner, Method method, const BakeOptions& options)
+    : s_(std::make_unique<State>()) {
+  s_->sk = &skinner;
+  s_->method = method;
+  s_->options = options;
+  start_bake(skinner, method, options, s_->bake);
+}
+
+FrameBaker::~FrameBaker() = default;
+
+track::Positions FrameBaker::next(const Pose& pose, FrameStats* stats) {
+  check_poses(s_->sk->rig(), {pose});
+  FrameStats st;
+  const auto t0 = Clock::now();
+  track::Positions pos;
+  s_->contact = deform(*s_->sk, s_->method, s_->bake, pose, s_->options.grain, st, pos);
+  st.ms = ms_since(t0);
+  if (s_->options.metrics)
+    st.metrics = measure_frame(*s_->sk, pose, pos, s_->options, s_->contact, s_->bake.tracker.get());
+  if (stats) *stats = std::move(st);
+  return pos;
+}
+
+const std::vector<std::uint8_t>* FrameBaker::contacts() const {
+  return s_->contact;
+}
+
+const std::vector<float>& FrameBaker::mask() const {
+  return s_->bake.mask;
+}
+
+Method FrameBaker::method() const {
+  return s_->method;
+}
+
 BakeResult Skinner::bake(Method method, const std::vector<Pose>& poses, const BakeOptions& options) {
   check_poses(rig_, poses);
   BakeResult out;
   out.method = method;
-  BakeState s;
-  start_bake(*this, method, options, s);
+  FrameBaker baker(*this, method, options);
   double total_ms = 0, vertex_iterations = 0;
   for (std::size_t f = 0; f < poses.size(); ++f) {
     FrameStats st;
-    const auto t0 = Clock::now();
-    track::Positions pos;
-    const std::vector<std::uint8_t>* contact = deform(*this, method, s, poses[f], options.grain, st, pos);
-    st.ms = ms_since(t0);
+    track::Positions pos = baker.next(poses[f], &st);
     total_ms += st.ms;
     vertex_iterations += st.vertex_updates;
-    if (options.metrics) {
-      st.metrics = measure_frame(*this, poses[f], pos, options, contact, s.tracker.get());
-      out.worst = f == 0 ? st.metrics : worst_of(out.worst, st.metrics);
-    }
+    if (options.metrics) out.worst = f == 0 ? st.metrics : worst_of(out.worst, st.metrics);
     if (progress_)
       progress_(std::string("bake ") + to_string(method), static_cast<int>(f + 1),
                 static_cast<int>(poses.size()));
     out.frames.push_back(std::move(pos));
-    out.stats.push_back(st);
+    out.stats.push_back(std::move(st));
   }
   out.mean_ms = total_ms / double(poses.size());
   out.vertex_iterations_per_second = total_ms > 0 ? vertex_iterations / (total_ms * 1e-3) : 0;

@@ -81,6 +81,35 @@ struct BakeOptions {
   std::size_t grain{1024};        ///< parallel grain (0 = serial, same results)
 };
 
+class Skinner;
+
+/// A bake one frame at a time (the viewer, live previews): the state of `Skinner::bake` kept
+/// between calls, so that the frames of `next` over a list of poses equal `bake`'s over the same
+/// list, bit for bit (`bake` runs on it). The tracking starts from the rest mesh at the rest pose.
+/// The skinner must outlive it.
+class FrameBaker {
+ public:
+  /// \throw InputError as Skinner::bake (a field that cannot be built).
+  FrameBaker(Skinner& skinner, Method method, const BakeOptions& options = {});
+  ~FrameBaker();
+  FrameBaker(const FrameBaker&) = delete;
+  FrameBaker& operator=(const FrameBaker&) = delete;
+
+  /// Deforms the rest mesh to `pose` (local joint transforms), from the last frame's state;
+  /// `stats` receives the frame's statistics and, with BakeOptions::metrics, its metrics.
+  /// \throw InputError for a pose with the wrong joint count.
+  track::Positions next(const Pose& pose, FrameStats* stats = nullptr);
+  /// The method's contact flags of the last frame (implicit methods), else null.
+  const std::vector<std::uint8_t>* contacts() const;
+  /// The relaxation mask per vertex in use (empty: every vertex tracked; lbs and dqs: empty).
+  const std::vector<float>& mask() const;
+  Method method() const;
+
+ private:
+  struct State;
+  std::unique_ptr<State> s_;
+};
+
 class Skinner {
  public:
   /// Validates the rig, computes heat weights when it has none, partitions and fits (progress
