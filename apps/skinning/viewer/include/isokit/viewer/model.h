@@ -1,0 +1,158 @@
+// SPDX-License-Identifier: MIT
+/// \file
+/// The skinning viewer's model (`isokit-skin view`, docs/skinning.md): a rig posed by hand or by a
+/// clip, skinned by one method (and a second one beside it), with what the overlays and the
+/// statistics panel show. No drawing: the window reads the queries and calls the edits, and the
+/// unit tests drive the same calls.
+///
+/// Two sources of poses:
+/// - **Editing** (the default): each joint's rotation from its rest pose, as angles about its
+///   local x, y and z axes in that order (the pose-script convention, `save_pose_script`), set by
+///   sliders. An edit is one undo step; a slider drag (`begin_drag` ... `end_drag`) is one step
+///   however many values it set. The implicit methods follow the edits as a sequence of frames
+///   (the 2014 tracker is incremental): each shown pose is the next frame of one FrameBaker.
+/// - **A clip** (`play_clip`): frame f is the f-th frame of `Skinner::bake` over the clip, bit for
+///   bit: frames are baked from the clip's start in order and cached per method, so scrubbing
+///   back is free and forward bakes only the frames not yet cached.
+///
+/// Everything runs on the calling thread: a call that needs new frames returns when they are
+/// baked.
+#pragma once
+
+#include <array>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "isokit/skinning/pipeline.h"
+
+namespace isokit::viewer {
+
+using skinning::Method;
+using skinning::Pose;
+
+/// Options of the viewer model.
+struct ViewerOptions {
+  /// Count self-intersecting triangle pairs for the overlay and the statistics (the slowest
+  /// metric). Default true.
+  bool self_intersections{true};
+  std::size_t grain{1024};  ///< parallel grain of the bakes (0 = serial, same results)
+};
+
+/// Per-vertex and per-triangle flags of the shown frame, for the overlays.
+struct Overlays {
+  std::vector<std::uint8_t> contact;     ///< per vertex: the method's contact flag (implicit methods)
+  std::vector<float> mask;               ///< per vertex: the relaxation mask in use (1 = tracked)
+  std::vector<float> dqs_distance;       ///< per vertex: distance to DQS's position, rig units
+  std::vector<std::uint8_t> inverted;    ///< per triangle: inverted w.r.t. the field (2014 tree)
+  std::vector<std::uint8_t> intersecting;  ///< per triangle: in a self-intersecting pair
+};
+
+class ViewerModel {
+ public:
+  /// A viewer of `skinner`'s rig, at the rest pose, editing, with `method`.
+  explicit ViewerModel(std::shared_ptr<skinning::Skinner> skinner, Method method = Method::kTracking2014,
+                       ViewerOptions options = {});
+  ~ViewerModel();
+  ViewerModel(const ViewerModel&) = delete;
+  ViewerModel& operator=(const ViewerModel&) = delete;
+
+  const skinning::Rig& rig() const;
+
+  // ---- Joints.
+  /// The selected joint, -1 for none.
+  int selected_joint() const { return selected_; }
+  /// Selects joint `j` (-1: none). \throw InputError for another index.
+  void select_joint(int j);
+  /// The joint nearest to the ray `origin + t dir` (t ≥ 0) within `radius` of it, at the shown
+  /// pose, or -1.
+  int pick_joint(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir, double radius) const;
+  /// World positions of the joints at the shown pose.
+  std::vector<Eigen::Vector3d> joint_positions() const;
+
+  // ---- Editing (ends clip playback).
+  /// The joint's rotation from its rest pose: degrees about its local x, y, z (in that order).
+  std::array<double, 3> joint_angles(int j) const;
+  /// Sets it (one undo step, or part of the drag in progress) and bakes the new pose.
+  /// \throw InputError for a bad joint or a non-finite angle.
+  void set_joint_angles(int j, const std::array<double, 3>& degrees);
+  /// A slider drag: the edits until end_drag are one undo step.
+  void begin_drag();
+  void end_drag();
+  bool dragging() const { return dragging_; }
+  /// Every joint back to its rest pose (one undo step).
+  void reset_pose();
+  bool can_undo() const { return !undo_.empty(); }
+  bool can_redo() const { return !redo_.empty(); }
+  void undo();
+  void redo();
+  /// Writes the edited pose as a pose script (`isokit-skin bake --pose-script`: one key, frame 0,
+  /// each turned joint's [["x", a], ["y", b], ["z", c]]) atomically. \throw InputError naming the file.
+  void save_pose_script(const std::string& path) const;
+  /// The edited pose (local joint transforms).
+  Pose edited_pose() const;
+
+  // ---- Clips.
+  std::vector<std::string> clips() const;
+  /// Plays clip `name` from frame 0 (bakes it). \throw InputError listing the clips.
+  void play_clip(const std::string& name);
+  /// The clip played ("" when editing).
+  const std::string& clip() const { return clip_; }
+  int frame_count() const { return static_cast<int>(clip_poses_.size()); }
+  int frame() const { return frame_; }
+  /// Shows frame `f` (clamped) of the clip, baking the frames before it not yet cached.
+  void set_frame(int f);
+  /// Back to editing, at the last edited pose.
+  void stop_clip();
+
+  // ---- Methods.
+  Method method() const { return method_; }
+  void set_method(Method m);
+  /// A second method shown beside the first (none: one view).
+  const std::optional<Method>& compare() const { return compare_; }
+  void set_compare(std::optional<Method> m);
+
+  // ---- The shown frame.
+  /// The shown frame's welded positions by `method()`, and by `compare()` when set (else null).
+  const track::Positions& positions() const;
+  const track::Positions* compare_positions() const;
+  /// Statistics and metrics of the shown frame by `method()`.
+  const skinning::FrameStats& stats() const;
+  /// Overlays of the shown frame by `method()` (computed on first call per frame).
+  const Overlays& overlays();
+  /// Frames baked so far (editing steps and clip frames, every method): for tests and the panel.
+  long frames_baked() const { return frames_baked_; }
+
+ private:
+  struct Frame {
+    track::Positions positions;
+    skinning::FrameStats stats;
+    std::vector<std::uint8_t> contact;
+  };
+  struct Track;  // one method's bakers and clip cache
+  Track& track_of(Method m);
+  const Frame& shown(Method m) const;
+  void refresh();
+  void push_undo();
+  Pose pose_of(const std::vector<std::array<double, 3>>& angles) const;
+
+  std::shared_ptr<skinning::Skinner> skinner_;
+  ViewerOptions options_;
+  Method method_;
+  std::optional<Method> compare_;
+  int selected_{-1};
+  std::vector<std::array<double, 3>> angles_;  ///< per joint, the edited pose
+  std::vector<std::vector<std::array<double, 3>>> undo_, redo_;
+  bool dragging_{false};
+  bool drag_changed_{false};
+  std::string clip_;
+  std::vector<Pose> clip_poses_;
+  int frame_{0};
+  std::map<Method, std::unique_ptr<Track>> tracks_;
+  std::optional<Overlays> overlays_;
+  long frames_baked_{0};
+};
+
+}  // namespace isokit::viewer

@@ -1,0 +1,331 @@
+// SPDX-License-Identifier: MIT
+// The skinning viewer's model (model.h): edited poses with undo, clips baked once per method,
+// the shown frame's statistics and overlays.
+#include "isokit/viewer/model.h"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <nlohmann/json.hpp>
+
+#include "isokit/core/atomic_file.h"
+#include "isokit/core/error.h"
+#include "isokit/skinning/animation.h"
+#include "isokit/skinning/deform.h"
+#include "isokit/skinning/metrics.h"
+
+namespace isokit::viewer {
+
+using skinning::Affine;
+using skinning::FrameBaker;
+using skinning::Rig;
+
+/// One method's bakers: the editing one (the edited poses as a sequence of frames) and the clip's
+/// (frames cached from the clip's start).
+struct ViewerModel::Track {
+  std::unique_ptr<FrameBaker> edit_baker;
+  Frame edit_frame;
+  std::unique_ptr<FrameBaker> clip_baker;
+  std::string clip;
+  std::vector<Frame> clip_frames;
+};
+
+namespace {
+
+/// The rotation of `degrees` about local x, then y, then z (the pose-script order).
+Eigen::Matrix3d rotation_of(const std::array<double, 3>& degrees) {
+  Eigen::Matrix3d r = Eigen::Matrix3d::Identity();
+  for (int a = 0; a < 3; ++a)
+    r = r * Eigen::AngleAxisd(degrees[std::size_t(a)] * kPi / 180.0, Eigen::Vector3d::Unit(a)).toRotationMatrix();
+  return r;
+}
+
+skinning::BakeOptions bake_options(const ViewerOptions& o) {
+  skinning::BakeOptions b;
+  b.metrics = true;
+  b.self_intersections = o.self_intersections;
+  b.grain = o.grain;
+  return b;
+}
+
+}  // namespace
+
+ViewerModel::ViewerModel(std::shared_ptr<skinning::Skinner> skinner, Method method, ViewerOptions options)
+    : skinner_(std::move(skinner)), options_(options), method_(method) {
+  require(skinner_ != nullptr, "viewer", "has no rig", "open a rig first");
+  angles_.assign(rig().joints.size(), {0.0, 0.0, 0.0});
+  refresh();
+}
+
+ViewerModel::~ViewerModel() = default;
+
+const Rig& ViewerModel::rig() const {
+  return skinner_->rig();
+}
+
+void ViewerModel::select_joint(int j) {
+  require(j >= -1 && j < static_cast<int>(rig().joints.size()), "viewer: joint " + std::to_string(j),
+          "does not exist", "select one of the rig's " + std::to_string(rig().joints.size()) + " joints, or -1");
+  selected_ = j;
+}
+
+std::vector<Eigen::Vector3d> ViewerModel::joint_positions() const {
+  const Pose pose = clip_.empty() ? edited_pose() : clip_poses_[std::size_t(frame_)];
+  const std::vector<Affine> world = skinning::world_transforms(rig(), pose);
+  std::vector<Eigen::Vector3d> out;
+  for (const Affine& w : world) out.push_back(w.translation());
+  return out;
+}
+
+int ViewerModel::pick_joint(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir, double radius) const {
+  const Eigen::Vector3d d = dir.normalized();
+  int best = -1;
+  double best_t = INFINITY;
+  const std::vector<Eigen::Vector3d> at = joint_positions();
+  for (std::size_t j = 0; j < at.size(); ++j) {
+    const double t = std::max(0.0, (at[j] - origin).dot(d));
+    if ((origin + t * d - at[j]).norm() <= radius && t < best_t) best = static_cast<int>(j), best_t = t;
+  }
+  return best;
+}
+
+std::array<double, 3> ViewerModel::joint_angles(int j) const {
+  require(j >= 0 && j < static_cast<int>(angles_.size()), "viewer: joint " + std::to_string(j), "does not exist",
+          "use an index into the rig's joints");
+  return angles_[std::size_t(j)];
+}
+
+Pose ViewerModel::pose_of(const std::vector<std::array<double, 3>>& angles) const {
+  Pose pose = skinning::rest_pose(rig());
+  for (std::size_t j = 0; j < pose.size(); ++j)
+    if (angles[j] != std::array<double, 3>{0.0, 0.0, 0.0}) {
+      Affine r = Affine::Identity();
+      r.linear() = rotation_of(angles[j]);
+      pose[j] = pose[j] * r;
+    }
+  return pose;
+}
+
+Pose ViewerModel::edited_pose() const {
+  return pose_of(angles_);
+}
+
+void ViewerModel::push_undo() {
+  undo_.push_back(angles_);
+  redo_.clear();
+}
+
+void ViewerModel::set_joint_angles(int j, const std::array<double, 3>& degrees) {
+  joint_angles(j);  // checks j
+  for (double a : degrees)
+    require(std::isfinite(a), "viewer: joint " + std::to_string(j) + " angle", "is not finite", "give degrees");
+  clip_.clear();
+  if (degrees == angles_[std::size_t(j)]) return;
+  if (!dragging_ || !drag_changed_) push_undo();
+  if (dragging_) drag_changed_ = true;
+  angles_[std::size_t(j)] = degrees;
+  refresh();
+}
+
+void ViewerModel::begin_drag() {
+  dragging_ = true;
+  drag_changed_ = false;
+}
+
+void ViewerModel::end_drag() {
+  dragging_ = false;
+  drag_changed_ = false;
+}
+
+void ViewerModel::reset_pose() {
+  clip_.clear();
+  const std::vector<std::array<double, 3>> rest(angles_.size(), {0.0, 0.0, 0.0});
+  if (angles_ == rest) return;
+  end_drag();
+  push_undo();
+  angles_ = rest;
+  refresh();
+}
+
+void ViewerModel::undo() {
+  if (undo_.empty()) return;
+  end_drag();
+  clip_.clear();
+  redo_.push_back(angles_);
+  angles_ = undo_.back();
+  undo_.pop_back();
+  refresh();
+}
+
+void ViewerModel::redo() {
+  if (redo_.empty()) return;
+  end_drag();
+  clip_.clear();
+  undo_.push_back(angles_);
+  angles_ = redo_.back();
+  redo_.pop_back();
+  refresh();
+}
+
+void ViewerModel::save_pose_script(const std::string& path) const {
+  using nlohmann::json;
+  json joints = json::object();
+  for (std::size_t j = 0; j < angles_.size(); ++j) {
+    const std::array<double, 3>& a = angles_[j];
+    if (a == std::array<double, 3>{0.0, 0.0, 0.0}) continue;
+    json turns = json::array();
+    for (int c = 0; c < 3; ++c) turns.push_back(json::array({std::string(1, char('x' + c)), a[std::size_t(c)]}));
+    joints[rig().joints[j].name] = turns;
+  }
+  json key = json::object();
+  key["frame"] = 0;
+  key["joints"] = joints;
+  json doc = json::object();
+  doc["keys"] = json::array({key});
+  write_text_file_atomically(path, doc.dump(2) + "\n");
+}
+
+std::vector<std::string> ViewerModel::clips() const {
+  std::vector<std::string> names;
+  for (const skinning::Clip& c : rig().clips) names.push_back(c.name);
+  return names;
+}
+
+void ViewerModel::play_clip(const std::string& name) {
+  clip_poses_ = skinning::clip_animation(rig(), name);  // throws listing the clips
+  require(!clip_poses_.empty(), "viewer: clip '" + name + "'", "has no frames", "choose another clip");
+  end_drag();
+  clip_ = name;
+  frame_ = 0;
+  refresh();
+}
+
+void ViewerModel::set_frame(int f) {
+  if (clip_.empty()) return;
+  frame_ = std::clamp(f, 0, frame_count() - 1);
+  refresh();
+}
+
+void ViewerModel::stop_clip() {
+  if (clip_.empty()) return;
+  clip_.clear();
+  refresh();
+}
+
+void ViewerModel::set_method(Method m) {
+  method_ = m;
+  refresh();
+}
+
+void ViewerModel::set_compare(std::optional<Method> m) {
+  compare_ = m;
+  refresh();
+}
+
+ViewerModel::Track& ViewerModel::track_of(Method m) {
+  std::unique_ptr<Track>& t = tracks_[m];
+  if (!t) t = std::make_unique<Track>();
+  return *t;
+}
+
+// Bakes what the shown state needs, for the method and the compared one.
+void ViewerModel::refresh() {
+  overlays_.reset();
+  std::vector<Method> methods{method_};
+  if (compare_ && *compare_ != method_) methods.push_back(*compare_);
+  for (const Method m : methods) {
+    Track& t = track_of(m);
+    auto bake = [&](FrameBaker& baker, const Pose& pose, Frame& out) {
+      out.positions = baker.next(pose, &out.stats);
+      out.contact = baker.contacts() ? *baker.contacts() : std::vector<std::uint8_t>{};
+      ++frames_baked_;
+    };
+    if (clip_.empty()) {
+      if (!t.edit_baker) t.edit_baker = std::make_unique<FrameBaker>(*skinner_, m, bake_options(options_));
+      bake(*t.edit_baker, edited_pose(), t.edit_frame);
+      continue;
+    }
+    if (t.clip != clip_) {
+      t.clip = clip_;
+      t.clip_frames.clear();
+      t.clip_baker = std::make_unique<FrameBaker>(*skinner_, m, bake_options(options_));
+    }
+    while (static_cast<int>(t.clip_frames.size()) <= frame_) {
+      Frame f;
+      bake(*t.clip_baker, clip_poses_[t.clip_frames.size()], f);
+      t.clip_frames.push_back(std::move(f));
+    }
+  }
+}
+
+const ViewerModel::Frame& ViewerModel::shown(Method m) const {
+  const Track& t = *tracks_.at(m);
+  return clip_.empty() ? t.edit_frame : t.clip_frames[std::size_t(frame_)];
+}
+
+const track::Positions& ViewerModel::positions() const {
+  return shown(method_).positions;
+}
+
+const track::Positions* ViewerModel::compare_positions() const {
+  return compare_ ? &shown(*compare_).positions : nullptr;
+}
+
+const skinning::FrameStats& ViewerModel::stats() const {
+  return shown(method_).stats;
+}
+
+const Overlays& ViewerModel::overlays() {
+  if (overlays_) return *overlays_;
+  const Frame& f = shown(method_);
+  const Rig& r = rig();
+  const std::size_t nv = static_cast<std::size_t>(r.rest.rows());
+  const std::size_t nt = static_cast<std::size_t>(r.triangles.rows());
+  Overlays o;
+  o.contact = f.contact.empty() ? std::vector<std::uint8_t>(nv, 0) : f.contact;
+  const Track& t = *tracks_.at(method_);
+  const FrameBaker* baker = clip_.empty() ? t.edit_baker.get() : t.clip_baker.get();
+  o.mask = baker->mask().empty() ? std::vector<float>(nv, 1.0f) : baker->mask();
+  // Distance to DQS at the shown pose.
+  const Pose pose = clip_.empty() ? edited_pose() : clip_poses_[std::size_t(frame_)];
+  const std::vector<Affine> skin = skinning::skinning_matrices(r, pose);
+  track::Positions dqs;
+  skinning::dual_quaternion_blend(r.weights, skin, r.rest, dqs, nullptr, options_.grain);
+  o.dqs_distance.resize(nv);
+  for (std::size_t v = 0; v < nv; ++v)
+    o.dqs_distance[v] = (f.positions.row(Eigen::Index(v)) - dqs.row(Eigen::Index(v))).norm();
+  // Inverted triangles: the normal along +∇f at the centroid (the 2014 tree at the pose).
+  skinning::SkinField& field = skinner_->field(skinning::TreeKind::k2014);
+  const track::FieldFunction fn = field.function(field.pose_of(skin));
+  std::vector<Vec3f> centroid(nt), grad(nt);
+  std::vector<float> value(nt);
+  std::vector<std::uint8_t> unused(nt);
+  for (std::size_t k = 0; k < nt; ++k) {
+    Eigen::Vector3f c = Eigen::Vector3f::Zero();
+    for (int i = 0; i < 3; ++i) c += f.positions.row(r.triangles(Eigen::Index(k), i)).transpose();
+    c /= 3.f;
+    centroid[k] = Vec3f{c.x(), c.y(), c.z()};
+  }
+  if (nt > 0) fn(centroid.data(), nt, value.data(), grad.data(), unused.data());
+  o.inverted.assign(nt, 0);
+  for (std::size_t k = 0; k < nt; ++k) {
+    const Eigen::Vector3f a = f.positions.row(r.triangles(Eigen::Index(k), 0)).transpose();
+    const Eigen::Vector3f b = f.positions.row(r.triangles(Eigen::Index(k), 1)).transpose();
+    const Eigen::Vector3f c = f.positions.row(r.triangles(Eigen::Index(k), 2)).transpose();
+    const Eigen::Vector3f n = (b - a).cross(c - a);
+    o.inverted[k] = n.dot(Eigen::Vector3f(grad[k].x, grad[k].y, grad[k].z)) > 0.f ? 1 : 0;
+  }
+  // Self-intersecting triangles.
+  o.intersecting.assign(nt, 0);
+  if (options_.self_intersections) {
+    skinning::SelfIntersectionDetails details;
+    skinning::SelfIntersectionOptions so;
+    so.max_pairs = static_cast<int>(std::min<std::size_t>(nt * 4, 1u << 20));
+    skinning::count_self_intersections(f.positions, r.triangles, &details, so);
+    for (const auto& p : details.pairs) o.intersecting[std::size_t(p[0])] = o.intersecting[std::size_t(p[1])] = 1;
+  }
+  overlays_ = std::move(o);
+  return *overlays_;
+}
+
+}  // namespace isokit::viewer
