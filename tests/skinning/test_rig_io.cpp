@@ -1043,3 +1043,41 @@ TEST_CASE("rig_io: the relaxation mask from a vertex-colour set, and bad masks",
   bad.relax_mask[3] = -0.5f;
   CHECK_THAT(error_of([&] { validate(bad); }), Catch::Contains("relaxation mask of vertex 3"));
 }
+
+TEST_CASE("rig_io: the relaxation mask from a COLLADA colour set, read in the importer's child and in process",
+          "[skinning][io][mask][unit]") {
+  // The strip with a colour per vertex: red 0.3, green = y / 2 (0 at the root end, 1 at the tip).
+  std::string dae = kStripDae;
+  const std::string colours = R"(<source id="strip-col">
+          <float_array id="strip-col-array" count="24">0.3 0 0 1 0.3 0 0 1 0.3 0.5 0 1 0.3 0.5 0 1 0.3 1 0 1 0.3 1 0 1</float_array>
+          <technique_common><accessor source="#strip-col-array" count="6" stride="4">
+            <param name="R" type="float"/><param name="G" type="float"/><param name="B" type="float"/><param name="A" type="float"/>
+          </accessor></technique_common>
+        </source>
+        <vertices id="strip-verts">)";
+  const std::size_t at = dae.find("<vertices id=\"strip-verts\">");
+  REQUIRE(at != std::string::npos);
+  dae.replace(at, std::string("<vertices id=\"strip-verts\">").size(), colours);
+  const std::string vertex_input = R"(<input semantic="VERTEX" source="#strip-verts" offset="0"/>)";
+  const std::size_t in = dae.find(vertex_input);
+  REQUIRE(in != std::string::npos);
+  dae.insert(in + vertex_input.size(), R"(<input semantic="COLOR" source="#strip-col" offset="0" set="0"/>)");
+  TempDir dir("dae_mask");
+  write_all(dir.file("painted.dae"), dae.c_str());
+  for (const bool isolate : {true, false}) {
+    INFO((isolate ? "in the importer's child" : "in process"));
+    LoadOptions o;
+    o.isolate_importer = isolate;
+    o.mask.color_set = 0;
+    o.mask.channel = 1;
+    LoadReport report;
+    const Rig rig = load_rig(dir.file("painted.dae"), o, &report);
+    CHECK(report.mask_source == "vertex colour set 0 channel g");
+    REQUIRE(rig.relax_mask.size() == static_cast<std::size_t>(rig.rest.rows()));
+    for (Eigen::Index v = 0; v < rig.rest.rows(); ++v)
+      CHECK(rig.relax_mask[std::size_t(v)] == Approx(rig.rest(v, 1) / 2.0f).margin(1e-6));
+    // Without the setup's choice a COLLADA file has no mask (the attribute is glTF's).
+    o.mask.color_set = -1;
+    CHECK(load_rig(dir.file("painted.dae"), o).relax_mask.empty());
+  }
+}
