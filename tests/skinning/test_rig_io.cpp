@@ -1029,6 +1029,17 @@ TEST_CASE("rig_io: the relaxation mask from a vertex-colour set, and bad masks",
   o.mask.color_set = 1;  // no such set: no mask
   CHECK(load_rig(dir.file("painted.gltf"), o).relax_mask.empty());
   CHECK(load_rig(dir.file("painted.gltf")).relax_mask.empty());  // no attribute, no set chosen
+  // Colours of another shape (VEC2) are skipped with a warning: the file still loads.
+  for (const json& mesh : doc["meshes"])
+    for (const json& prim : mesh["primitives"])
+      doc["accessors"][prim["attributes"]["COLOR_0"].get<std::size_t>()]["type"] = "VEC2";
+  std::ofstream(dir.file("two.gltf")) << doc.dump();
+  o.mask.color_set = 0;
+  o.mask.channel = 0;
+  LoadReport two;
+  CHECK(load_rig(dir.file("two.gltf"), o, &two).relax_mask.empty());
+  CHECK(std::any_of(two.warnings.begin(), two.warnings.end(),
+                    [](const std::string& w) { return w.find("COLOR_0") != std::string::npos; }));
   o.mask.color_set = 9;
   CHECK_THAT(error_of([&] { load_rig(dir.file("painted.gltf"), o); }), Catch::Contains("mask.color_set"));
   o.mask.color_set = 0;

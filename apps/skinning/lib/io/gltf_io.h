@@ -89,10 +89,13 @@ tinygltf::Model read_model(const std::string& path, std::vector<std::string>* wa
 /// name per node. \throw InputError naming `path` for a node cycle or a bad accessor.
 /// What it decodes is charged to `budget` when given. A primitive's COLOR_n (n < kMaskColorSet)
 /// becomes the mesh's colour set n; its scalar attribute `mask_attribute` (non-empty; the
-/// relaxation mask, LoadOptions::mask_attribute) becomes colour set kMaskColorSet (r = g = b = value).
+/// relaxation mask, LoadOptions::mask) becomes colour set kMaskColorSet (r = g = b = value). A
+/// colour or mask accessor of another shape is skipped with a line in `warnings` (when given): the
+/// file stays readable.
 std::unique_ptr<aiScene> to_ai_scene(const tinygltf::Model& model, const std::vector<std::string>& node_names,
                                      const std::string& path, LoadBudget* budget = nullptr,
-                                     const std::string& mask_attribute = "");
+                                     const std::string& mask_attribute = "",
+                                     std::vector<std::string>* warnings = nullptr);
 
 /// The aiMesh colour set that carries a glTF primitive's relaxation-mask attribute.
 constexpr unsigned kMaskColorSet = 7;

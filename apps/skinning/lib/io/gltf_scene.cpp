@@ -79,8 +79,14 @@ constexpr std::uint64_t kSceneBytesPerTriangle = 96;
 class SceneBuilder {
  public:
   SceneBuilder(const tinygltf::Model& model, const std::vector<std::string>& node_names,
-               const std::string& path, LoadBudget* budget, const std::string& mask_attribute)
-      : m_(model), names_(node_names), path_(path), budget_(budget), mask_attribute_(mask_attribute) {}
+               const std::string& path, LoadBudget* budget, const std::string& mask_attribute,
+               std::vector<std::string>* warnings)
+      : m_(model),
+        names_(node_names),
+        path_(path),
+        budget_(budget),
+        mask_attribute_(mask_attribute),
+        warnings_(warnings) {}
 
   std::unique_ptr<aiScene> build();
 
@@ -97,6 +103,7 @@ class SceneBuilder {
   const std::string& path_;
   LoadBudget* budget_;
   const std::string& mask_attribute_;
+  std::vector<std::string>* warnings_;
   std::vector<std::unique_ptr<aiMesh>> meshes_;
   std::map<int, std::vector<unsigned>> mesh_ids_;  ///< glTF mesh -> its aiMesh indices
   std::vector<std::unique_ptr<aiCamera>> cameras_;
@@ -195,25 +202,29 @@ void SceneBuilder::add_colors(aiMesh* mesh, const tinygltf::Primitive& prim, con
                                        : aiColor4D(float(c[0]), float(c[1]), float(c[2]), comps == 4 ? float(c[3]) : 1.f);
     }
   };
+  // Colours are optional data: one of an unexpected shape is skipped, not the file refused.
+  auto usable = [&](const std::string& w, int comps, bool ok_comps, std::size_t values) {
+    const bool ok = ok_comps && values == std::size_t(nv) * std::size_t(comps);
+    if (!ok && warnings_ != nullptr)
+      warnings_->push_back(w + ": " + std::to_string(comps) + " component(s) per vertex and " +
+                           std::to_string(values) + " values for " + std::to_string(nv) + " vertices; not read");
+    return ok;
+  };
   for (unsigned k = 0; k < kMaskColorSet; ++k) {
     const auto it = prim.attributes.find("COLOR_" + std::to_string(k));
     if (it == prim.attributes.end()) continue;
     int comps = 0;
     const std::string w = what + " COLOR_" + std::to_string(k);
     const std::vector<double> v = read_accessor(m_, it->second, &comps, w, budget_);
-    require(comps == 3 || comps == 4, w, "has " + std::to_string(comps) + " components, not 3 or 4",
-            "fix the file or export it again");
-    require(v.size() == std::size_t(nv) * std::size_t(comps), w, "count differs from POSITION's",
-            "fix the file or export it again");
-    set(k, v, comps);
+    if (usable(w, comps, comps == 3 || comps == 4, v.size())) set(k, v, comps);
   }
   if (mask_attribute_.empty()) return;
   const auto it = prim.attributes.find(mask_attribute_);
   if (it == prim.attributes.end()) return;
-  const std::string w = what + " " + mask_attribute_;
-  const std::vector<float> v = floats(m_, it->second, 1, w, budget_);
-  require(v.size() == nv, w, "count differs from POSITION's", "fix the file or export it again");
-  set(kMaskColorSet, std::vector<double>(v.begin(), v.end()), 1);
+  int comps = 0;
+  const std::string w = what + " " + mask_attribute_ + " (the relaxation mask: a scalar per vertex)";
+  const std::vector<double> v = read_accessor(m_, it->second, &comps, w, budget_);
+  if (usable(w, comps, comps == 1, v.size())) set(kMaskColorSet, v, 1);
 }
 
 /// One bone per joint of `skin` (named by the joint node, offset = its inverse bind matrix or the
@@ -427,8 +438,8 @@ std::unique_ptr<aiScene> SceneBuilder::build() {
 
 std::unique_ptr<aiScene> to_ai_scene(const tinygltf::Model& model, const std::vector<std::string>& node_names,
                                      const std::string& path, LoadBudget* budget,
-                                     const std::string& mask_attribute) {
-  return SceneBuilder(model, node_names, path, budget, mask_attribute).build();
+                                     const std::string& mask_attribute, std::vector<std::string>* warnings) {
+  return SceneBuilder(model, node_names, path, budget, mask_attribute, warnings).build();
 }
 
 }  // namespace isokit::skinning::gltf

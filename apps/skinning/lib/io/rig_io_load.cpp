@@ -1116,7 +1116,8 @@ Rig Loader::load() {
   if (ext == ".gltf" || ext == ".glb") {
     const tinygltf::Model model = gltf::read_model(path_, &report_.warnings, &budget_);
     gltf_ = check_gltf(model, path_, report_, budget_);
-    own_scene_ = gltf::to_ai_scene(model, gltf_.node_names, path_, &budget_, options_.mask.attribute);
+    own_scene_ =
+        gltf::to_ai_scene(model, gltf_.node_names, path_, &budget_, options_.mask.attribute, &report_.warnings);
     scene_ = own_scene_.get();
   } else {
     const auto bytes = fs::file_size(path_, ec);
