@@ -181,3 +181,41 @@ TEST_CASE("viewer: a ray picks the joint it passes nearest to", "[viewer][unit]"
   CHECK(m.pick_joint(from, at[0] - from, 0.05) == 0);
   CHECK(m.pick_joint(from, Eigen::Vector3d(1, 0, 0), 0.05) == -1);
 }
+
+TEST_CASE("viewer: baking in the background shows the last finished frame, then the synchronous result",
+          "[viewer][unit]") {
+  auto sk = cylinder();
+  ViewerOptions bg = quick();
+  bg.background = true;
+  ViewerModel a(sk, Method::kTracking2014, bg);
+  ViewerModel b(cylinder(), Method::kTracking2014, quick());  // its own skinner: a's worker uses sk
+  CHECK(a.positions() == b.positions());  // the first frame is waited for
+  CHECK_FALSE(a.pending());
+  for (const double angle : {40.0, 80.0}) {
+    a.set_joint_angles(1, {angle, 0, 0});
+    b.set_joint_angles(1, {angle, 0, 0});
+    CHECK(a.pending());  // nothing is published before poll()
+    a.wait_idle();
+    CHECK_FALSE(a.pending());
+    CHECK(a.shown_id() == a.request_id());
+    CHECK(a.positions() == b.positions());  // one request at a time: the same frames
+  }
+  // A burst of edits: each replaces the one not yet started; the last is shown in the end.
+  a.begin_drag();
+  for (int k = 1; k <= 20; ++k) a.set_joint_angles(1, {80.0 - 2.0 * k, 0, 0});
+  a.end_drag();
+  a.wait_idle();
+  CHECK(a.shown_id() == a.request_id());
+  CHECK(a.joint_angles(1)[0] == 40.0);
+  // A clip frame and the compared method, from the worker.
+  a.set_compare(Method::kDqs);
+  a.play_clip("bend");
+  a.set_frame(5);
+  a.wait_idle();
+  const std::vector<Pose>& poses = sk->rig().clips[0].local;
+  CHECK(a.positions() == sk->bake(Method::kTracking2014, poses, quick_bake()).frames[5]);
+  REQUIRE(a.compare_positions() != nullptr);
+  CHECK(*a.compare_positions() == sk->bake(Method::kDqs, poses, quick_bake()).frames[5]);
+  const viewer::Overlays& o = a.overlays();
+  CHECK(o.dqs_distance.size() == static_cast<std::size_t>(sk->rig().rest.rows()));
+}

@@ -54,10 +54,31 @@ ViewerModel::ViewerModel(std::shared_ptr<skinning::Skinner> skinner, Method meth
     : skinner_(std::move(skinner)), options_(options), method_(method) {
   require(skinner_ != nullptr, "viewer", "has no rig", "open a rig first");
   angles_.assign(rig().joints.size(), {0.0, 0.0, 0.0});
+  if (options_.background) {
+    // Built now: the worker must not build them while the window's thread reads them.
+    skinner_->field(skinning::TreeKind::k2013);
+    skinner_->field(skinning::TreeKind::k2014);
+    worker_ = std::thread([this] { worker_loop(); });
+  }
   refresh();
+  if (options_.background) wait_idle();  // the first frame is there before the first draw
 }
 
-ViewerModel::~ViewerModel() = default;
+ViewerModel::~ViewerModel() {
+  if (worker_.joinable()) {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      stop_ = true;
+    }
+    wake_.notify_all();
+    worker_.join();
+  }
+}
+
+long ViewerModel::frames_baked() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return frames_baked_;
+}
 
 const Rig& ViewerModel::rig() const {
   return skinner_->rig();
@@ -192,8 +213,10 @@ std::vector<std::string> ViewerModel::clips() const {
 }
 
 void ViewerModel::play_clip(const std::string& name) {
-  clip_poses_ = skinning::clip_animation(rig(), name);  // throws listing the clips
-  require(!clip_poses_.empty(), "viewer: clip '" + name + "'", "has no frames", "choose another clip");
+  std::vector<Pose> poses = skinning::clip_animation(rig(), name);  // throws listing the clips
+  require(!poses.empty(), "viewer: clip '" + name + "'", "has no frames", "choose another clip");
+  clip_poses_ = std::move(poses);
+  clip_shared_ = std::make_shared<const std::vector<Pose>>(clip_poses_);
   end_drag();
   clip_ = name;
   frame_ = 0;
@@ -228,67 +251,156 @@ ViewerModel::Track& ViewerModel::track_of(Method m) {
   return *t;
 }
 
-// Bakes what the shown state needs, for the method and the compared one.
+// The shown state as a request: baked now, or posted to the worker.
 void ViewerModel::refresh() {
   overlays_.reset();
-  std::vector<Method> methods{method_};
-  if (compare_ && *compare_ != method_) methods.push_back(*compare_);
-  for (const Method m : methods) {
+  Request r;
+  r.id = ++request_id_;
+  r.methods = {method_};
+  if (compare_ && *compare_ != method_) r.methods.push_back(*compare_);
+  r.clip = clip_;
+  if (clip_.empty()) {
+    r.pose = edited_pose();
+  } else {
+    r.clip_poses = clip_shared_;
+    r.frame = frame_;
+  }
+  if (!options_.background) {
+    shown_ = execute(r);
+    shown_methods_ = r.methods;
+    shown_id_ = r.id;
+    return;
+  }
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    waiting_ = std::move(r);  // replaces a request not yet started
+  }
+  wake_.notify_all();
+}
+
+// Bakes request `r` for each of its methods (on the thread that owns the bakers).
+std::map<Method, ViewerModel::Frame> ViewerModel::execute(const Request& r) {
+  std::map<Method, Frame> out;
+  long baked = 0;
+  for (const Method m : r.methods) {
     Track& t = track_of(m);
-    auto bake = [&](FrameBaker& baker, const Pose& pose, Frame& out) {
-      out.positions = baker.next(pose, &out.stats);
-      out.contact = baker.contacts() ? *baker.contacts() : std::vector<std::uint8_t>{};
-      ++frames_baked_;
+    auto bake = [&](FrameBaker& baker, const Pose& pose, Frame& f) {
+      f.positions = baker.next(pose, &f.stats);
+      f.contact = baker.contacts() ? *baker.contacts() : std::vector<std::uint8_t>{};
+      f.mask = baker.mask();
+      f.pose = pose;
+      ++baked;
     };
-    if (clip_.empty()) {
+    if (r.clip.empty()) {
       if (!t.edit_baker) t.edit_baker = std::make_unique<FrameBaker>(*skinner_, m, bake_options(options_));
-      bake(*t.edit_baker, edited_pose(), t.edit_frame);
+      bake(*t.edit_baker, r.pose, t.edit_frame);
+      out[m] = t.edit_frame;
       continue;
     }
-    if (t.clip != clip_) {
-      t.clip = clip_;
+    if (t.clip != r.clip) {
+      t.clip = r.clip;
       t.clip_frames.clear();
       t.clip_baker = std::make_unique<FrameBaker>(*skinner_, m, bake_options(options_));
     }
-    while (static_cast<int>(t.clip_frames.size()) <= frame_) {
+    while (static_cast<int>(t.clip_frames.size()) <= r.frame) {
       Frame f;
-      bake(*t.clip_baker, clip_poses_[t.clip_frames.size()], f);
+      bake(*t.clip_baker, (*r.clip_poses)[t.clip_frames.size()], f);
       t.clip_frames.push_back(std::move(f));
     }
+    out[m] = t.clip_frames[std::size_t(r.frame)];
+  }
+  std::lock_guard<std::mutex> lock(mutex_);
+  frames_baked_ += baked;
+  return out;
+}
+
+// The worker: takes the waiting request, bakes it, leaves the frames for poll().
+void ViewerModel::worker_loop() {
+  for (;;) {
+    Request r;
+    {
+      std::unique_lock<std::mutex> lock(mutex_);
+      wake_.wait(lock, [this] { return stop_ || waiting_.has_value(); });
+      if (stop_) return;
+      r = std::move(*waiting_);
+      waiting_.reset();
+      busy_ = true;
+    }
+    std::map<Method, Frame> frames;
+    std::exception_ptr error;
+    try {
+      frames = execute(r);
+    } catch (...) {
+      error = std::current_exception();
+    }
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      if (error)
+        error_ = error;
+      else
+        finished_ = Finished{r.id, r.methods, std::move(frames)};
+      busy_ = false;
+    }
+    idle_.notify_all();
   }
 }
 
+bool ViewerModel::poll() {
+  std::optional<Finished> done;
+  std::exception_ptr error;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    done.swap(finished_);
+    std::swap(error, error_);
+  }
+  if (error) std::rethrow_exception(error);
+  if (!done) return false;
+  shown_ = std::move(done->frames);
+  shown_methods_ = std::move(done->methods);
+  shown_id_ = done->id;
+  overlays_.reset();
+  return true;
+}
+
+void ViewerModel::wait_idle() {
+  if (options_.background) {
+    std::unique_lock<std::mutex> lock(mutex_);
+    idle_.wait(lock, [this] { return !busy_ && !waiting_.has_value(); });
+  }
+  poll();
+}
+
 const ViewerModel::Frame& ViewerModel::shown(Method m) const {
-  const Track& t = *tracks_.at(m);
-  return clip_.empty() ? t.edit_frame : t.clip_frames[std::size_t(frame_)];
+  const auto it = shown_.find(m);
+  require(it != shown_.end(), "viewer", std::string("has no frame of ") + skinning::to_string(m) + " yet",
+          "wait for the bake (pending(), poll())");
+  return it->second;
 }
 
 const track::Positions& ViewerModel::positions() const {
-  return shown(method_).positions;
+  return shown(shown_methods_.front()).positions;
 }
 
 const track::Positions* ViewerModel::compare_positions() const {
-  return compare_ ? &shown(*compare_).positions : nullptr;
+  if (!compare_) return nullptr;
+  return &shown(shown_methods_.size() > 1 ? shown_methods_[1] : shown_methods_.front()).positions;
 }
 
 const skinning::FrameStats& ViewerModel::stats() const {
-  return shown(method_).stats;
+  return shown(shown_methods_.front()).stats;
 }
 
 const Overlays& ViewerModel::overlays() {
   if (overlays_) return *overlays_;
-  const Frame& f = shown(method_);
+  const Frame& f = shown(shown_methods_.front());
   const Rig& r = rig();
   const std::size_t nv = static_cast<std::size_t>(r.rest.rows());
   const std::size_t nt = static_cast<std::size_t>(r.triangles.rows());
   Overlays o;
   o.contact = f.contact.empty() ? std::vector<std::uint8_t>(nv, 0) : f.contact;
-  const Track& t = *tracks_.at(method_);
-  const FrameBaker* baker = clip_.empty() ? t.edit_baker.get() : t.clip_baker.get();
-  o.mask = baker->mask().empty() ? std::vector<float>(nv, 1.0f) : baker->mask();
-  // Distance to DQS at the shown pose.
-  const Pose pose = clip_.empty() ? edited_pose() : clip_poses_[std::size_t(frame_)];
-  const std::vector<Affine> skin = skinning::skinning_matrices(r, pose);
+  o.mask = f.mask.empty() ? std::vector<float>(nv, 1.0f) : f.mask;
+  // Distance to DQS at the shown frame's pose.
+  const std::vector<Affine> skin = skinning::skinning_matrices(r, f.pose);
   track::Positions dqs;
   skinning::dual_quaternion_blend(r.weights, skin, r.rest, dqs, nullptr, options_.grain);
   o.dqs_distance.resize(nv);

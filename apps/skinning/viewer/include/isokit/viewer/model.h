@@ -15,15 +15,24 @@
 ///   bit: frames are baked from the clip's start in order and cached per method, so scrubbing
 ///   back is free and forward bakes only the frames not yet cached.
 ///
-/// Everything runs on the calling thread: a call that needs new frames returns when they are
-/// baked.
+/// Threads: every member is called from one thread (the window's). Without
+/// `ViewerOptions::background` a call that needs new frames returns when they are baked. With
+/// it, one worker thread bakes: an edit or a frame change posts a request (a newer one replaces
+/// a request not yet started: a slider drag faster than the tracker skips poses, the tracker then
+/// sub-steps over the jump), and `poll()` (once per drawn frame) publishes what the worker
+/// finished; until then the queries show the last finished frame (`pending()`). The worker alone
+/// uses the skinner and the bakers (nothing else may use that skinner while the model lives, but
+/// between `wait_idle()` and the next request); the fields are built before it starts.
 #pragma once
 
 #include <array>
+#include <condition_variable>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "isokit/skinning/pipeline.h"
@@ -39,6 +48,8 @@ struct ViewerOptions {
   /// metric). Default true.
   bool self_intersections{true};
   std::size_t grain{1024};  ///< parallel grain of the bakes (0 = serial, same results)
+  /// Bake on a worker thread (see the file comment); the window sets it. Default false.
+  bool background{false};
 };
 
 /// Per-vertex and per-triangle flags of the shown frame, for the overlays.
@@ -115,7 +126,8 @@ class ViewerModel {
   void set_compare(std::optional<Method> m);
 
   // ---- The shown frame.
-  /// The shown frame's welded positions by `method()`, and by `compare()` when set (else null).
+  /// The shown frame's welded positions by `method()`, and by `compare()` when set (else null);
+  /// in the background, by the methods of the last published frame until the worker catches up.
   const track::Positions& positions() const;
   const track::Positions* compare_positions() const;
   /// Statistics and metrics of the shown frame by `method()`.
@@ -123,18 +135,42 @@ class ViewerModel {
   /// Overlays of the shown frame by `method()` (computed on first call per frame).
   const Overlays& overlays();
   /// Frames baked so far (editing steps and clip frames, every method): for tests and the panel.
-  long frames_baked() const { return frames_baked_; }
+  long frames_baked() const;
+
+  // ---- Background baking (ViewerOptions::background).
+  /// Publishes the frames the worker finished; true when the shown frame changed.
+  bool poll();
+  /// True while the shown frame is older than the last request.
+  bool pending() const { return shown_id_ != request_id_; }
+  /// The last request's number and that of the shown frame (each edit or frame change is one).
+  long request_id() const { return request_id_; }
+  long shown_id() const { return shown_id_; }
+  /// Waits until the worker has finished every request, then polls.
+  void wait_idle();
 
  private:
   struct Frame {
     track::Positions positions;
     skinning::FrameStats stats;
     std::vector<std::uint8_t> contact;
+    std::vector<float> mask;
+    Pose pose;  ///< the pose it was baked at
+  };
+  /// What the shown state needs baked: the edited pose, or a clip frame, for some methods.
+  struct Request {
+    long id{0};
+    std::string clip;
+    Pose pose;  ///< editing: the edited pose; clip: unused
+    std::shared_ptr<const std::vector<Pose>> clip_poses;  ///< clip: its poses (shared, immutable)
+    int frame{0};
+    std::vector<Method> methods;
   };
   struct Track;  // one method's bakers and clip cache
   Track& track_of(Method m);
   const Frame& shown(Method m) const;
   void refresh();
+  std::map<Method, Frame> execute(const Request& r);
+  void worker_loop();
   void push_undo();
   Pose pose_of(const std::vector<std::array<double, 3>>& angles) const;
 
@@ -150,9 +186,26 @@ class ViewerModel {
   std::string clip_;
   std::vector<Pose> clip_poses_;
   int frame_{0};
-  std::map<Method, std::unique_ptr<Track>> tracks_;
+  std::map<Method, std::unique_ptr<Track>> tracks_;  ///< the baking thread's
+  std::map<Method, Frame> shown_;                     ///< the published frames
+  std::vector<Method> shown_methods_;                 ///< theirs: the method, then the compared one
   std::optional<Overlays> overlays_;
+  long request_id_{0}, shown_id_{0};
+  std::shared_ptr<const std::vector<Pose>> clip_shared_;  ///< clip_poses_, for the requests
+  // Worker (background): the request waiting, the results finished, the counters.
+  mutable std::mutex mutex_;
+  std::condition_variable wake_, idle_;
+  std::optional<Request> waiting_;
+  struct Finished {
+    long id;
+    std::vector<Method> methods;
+    std::map<Method, Frame> frames;
+  };
+  std::optional<Finished> finished_;
+  bool busy_{false}, stop_{false};
   long frames_baked_{0};
+  std::exception_ptr error_;
+  std::thread worker_;
 };
 
 }  // namespace isokit::viewer
