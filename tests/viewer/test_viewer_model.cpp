@@ -47,7 +47,7 @@ BakeOptions quick_bake() {
 
 }  // namespace
 
-TEST_CASE("viewer: edits bake as bake does over the edited poses; a drag is one undo step",
+TEST_CASE("viewer: edits bake as bake does over the edited poses, a drag is one undo step",
           "[viewer][unit]") {
   auto sk = cylinder();
   ViewerModel m(sk, Method::kTracking2014, quick());
