@@ -211,6 +211,14 @@ void print_operators(const FittedRig& fitted, const SkinSetup& setup) {
     }
     std::printf("  %-24s %-40s %s\n", name.c_str(), ops[0].c_str(), ops[1].c_str());
   }
+  // Muscles (2014 Fig. 10): the same in both trees.
+  for (const MuscleSetup& m : setup.muscles) {
+    const double peak = std::max_element(m.curve.begin(), m.curve.end(), [](const auto& a, const auto& b) {
+                          return a.second < b.second;
+                        })->second;
+    std::printf("  muscle %-17s on %s, %s, scaled up to %s by the bend of %s\n", m.name.c_str(), m.bone.c_str(),
+                m.op == JointOperator::kUnion ? "union" : "blend", format_number(peak).c_str(), m.driver.c_str());
+  }
 }
 
 /// Everything the command line sets.
