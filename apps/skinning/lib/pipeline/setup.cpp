@@ -342,6 +342,16 @@ void read_tracker_repairs(const json& t, const std::string& w, SkinSetup& s) {
 }
 
 /// Section `tracker`: the 2014 tracker (track::TrackerOptions) and the axis guard.
+/// Section `tracker`, the keys of what is not tracked: rigid pieces and small parts.
+void read_tracker_rigid(const json& t, const std::string& w, SkinSetup& s) {
+  read(t, "rigid_pieces", s.rigid_pieces, w);
+  read(t, "small_part_mask", s.small_part_mask, w);
+  require(s.small_part_mask >= 0.f && s.small_part_mask <= 1.f, w + ".small_part_mask",
+          "must be in [0, 1] (got " + format_number(s.small_part_mask) + ")", "1 = off, 0 = DQS on small parts");
+  read(t, "small_part_vertices", s.small_part_vertices, w);
+  require(s.small_part_vertices >= 0, w + ".small_part_vertices", "must be >= 0", "use e.g. 100");
+}
+
 void read_tracker(const json& t, const std::string& w, SkinSetup& s) {
   check_keys(t,
              {"max_iterations",
@@ -397,12 +407,7 @@ void read_tracker(const json& t, const std::string& w, SkinSetup& s) {
   read(t, "angle_contacts", s.tracker.angle_contacts, w);
   read(t, "lazy_evaluation", s.tracker.lazy_evaluation, w);
   read(t, "axis_guard", s.axis_guard, w);
-  read(t, "rigid_pieces", s.rigid_pieces, w);
-  read(t, "small_part_mask", s.small_part_mask, w);
-  require(s.small_part_mask >= 0.f && s.small_part_mask <= 1.f, w + ".small_part_mask",
-          "must be in [0, 1] (got " + format_number(s.small_part_mask) + ")", "1 = off, 0 = DQS on small parts");
-  read(t, "small_part_vertices", s.small_part_vertices, w);
-  require(s.small_part_vertices >= 0, w + ".small_part_vertices", "must be >= 0", "use e.g. 100");
+  read_tracker_rigid(t, w, s);
   read(t, "chebyshev_rho", s.tracker.chebyshev_rho, w);
   require(std::isfinite(s.tracker.chebyshev_rho) && s.tracker.chebyshev_rho >= 0.f &&
               s.tracker.chebyshev_rho < 1.f,
