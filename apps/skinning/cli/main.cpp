@@ -24,6 +24,9 @@
 #include "isokit/skinning/grid_operators.h"
 #include "isokit/skinning/procedural.h"
 #include "isokit/skinning/rigid_pieces.h"
+#ifdef ISOKIT_HAVE_VIEWER
+#include "isokit/viewer/gui.h"
+#endif
 
 using namespace isokit::skinning;
 using isokit::format_number;
@@ -287,6 +290,22 @@ CLI::App* add_bake(CLI::App& app, Args& a) {
   return bake;
 }
 
+#ifdef ISOKIT_HAVE_VIEWER
+/// `isokit-skin view`: the viewer window (docs/skinning.md, "The viewer").
+CLI::App* add_view(CLI::App& app, isokit::viewer::ViewerGuiOptions& v) {
+  auto* view = app.add_subcommand("view", "Pose a rig and watch its skin live (GLFW + OpenGL window)");
+  view->add_option("RIG", v.rig, kRigHelp)->required();
+  view->add_option("--clip", v.clip, "a clip of the file to play at start");
+  view->add_option("--setup", v.setup, "JSON setup file");
+  view->add_option("--method", v.method, "lbs | dqs | implicit2013 | tracking2014")->capture_default_str();
+  view->add_option("--size", v.width, "window width in pixels")->capture_default_str();
+  view->add_option("--script", v.script_path, "headless: replay this JSON script of input events, then close");
+  view->add_option("--screenshot-dir", v.screenshot_dir, "where the script's screenshots and report go");
+  view->add_option("--report", v.report_path, "the script's report (default SCREENSHOT_DIR/viewer-report.json)");
+  return view;
+}
+#endif
+
 CLI::App* add_demo(CLI::App& app, Args& a) {
   auto* demo = app.add_subcommand(
       "demo", "The procedural humanoid's elbow and knee bent to 150° and back, all methods");
@@ -416,6 +435,10 @@ int main(int argc, char** argv) {
   const CLI::App* info = add_info(app, a);
   add_bake(app, a);
   const CLI::App* demo = add_demo(app, a);
+#ifdef ISOKIT_HAVE_VIEWER
+  isokit::viewer::ViewerGuiOptions view_options;
+  const CLI::App* view = add_view(app, view_options);
+#endif
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -430,6 +453,12 @@ int main(int argc, char** argv) {
     check_numbers(a);
     const Progress progress = stderr_progress();
     if (*info) return run_info(a, progress);
+#ifdef ISOKIT_HAVE_VIEWER
+    if (*view) {
+      view_options.height = view_options.width * 5 / 8;
+      return isokit::viewer::run_viewer(view_options);
+    }
+#endif
     if (*demo) {
       make_demo(a);
       return run_bake(a, all_methods(), Method::kTracking2014, progress);

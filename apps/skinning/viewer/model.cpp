@@ -5,6 +5,7 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <nlohmann/json.hpp>
 
@@ -42,7 +43,7 @@ Eigen::Matrix3d rotation_of(const std::array<double, 3>& degrees) {
 
 skinning::BakeOptions bake_options(const ViewerOptions& o) {
   skinning::BakeOptions b;
-  b.metrics = true;
+  b.metrics = !o.background;  // in the background: measured only when no newer request waits
   b.self_intersections = o.self_intersections;
   b.grain = o.grain;
   return b;
@@ -290,6 +291,7 @@ std::map<Method, ViewerModel::Frame> ViewerModel::execute(const Request& r) {
       f.mask = baker.mask();
       f.pose = pose;
       ++baked;
+      f.measured = !options_.background;
     };
     if (r.clip.empty()) {
       if (!t.edit_baker) t.edit_baker = std::make_unique<FrameBaker>(*skinner_, m, bake_options(options_));
@@ -314,8 +316,11 @@ std::map<Method, ViewerModel::Frame> ViewerModel::execute(const Request& r) {
   return out;
 }
 
-// The worker: takes the waiting request, bakes it, leaves the frames for poll().
+// The worker: takes the waiting request, bakes it, leaves the frames for poll(); when no newer
+// request comes within kMeasureDelay, measures those frames (the slow metrics: self-intersections)
+// and leaves them again.
 void ViewerModel::worker_loop() {
+  constexpr auto kMeasureDelay = std::chrono::milliseconds(150);
   for (;;) {
     Request r;
     {
@@ -333,16 +338,40 @@ void ViewerModel::worker_loop() {
     } catch (...) {
       error = std::current_exception();
     }
+    bool measure = false;
     {
-      std::lock_guard<std::mutex> lock(mutex_);
+      std::unique_lock<std::mutex> lock(mutex_);
       if (error)
         error_ = error;
       else
+        finished_ = Finished{r.id, r.methods, frames};
+      measure = !error && !wake_.wait_for(lock, kMeasureDelay, [this] { return stop_ || waiting_.has_value(); });
+      if (!measure) busy_ = false;
+    }
+    if (measure) {
+      try {
+        for (auto& [m, f] : frames) {
+          f.stats.metrics = skinner_->measure(f.pose, f.positions, options_.self_intersections,
+                                              f.contact.empty() ? nullptr : &f.contact);
+          f.measured = true;
+        }
+      } catch (...) {
+        error = std::current_exception();
+      }
+      std::lock_guard<std::mutex> lock(mutex_);
+      if (error)
+        error_ = error;
+      else if (!waiting_)
         finished_ = Finished{r.id, r.methods, std::move(frames)};
       busy_ = false;
     }
     idle_.notify_all();
   }
+}
+
+bool ViewerModel::newer_request() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return waiting_.has_value();
 }
 
 bool ViewerModel::poll() {
@@ -388,6 +417,10 @@ const track::Positions* ViewerModel::compare_positions() const {
 
 const skinning::FrameStats& ViewerModel::stats() const {
   return shown(shown_methods_.front()).stats;
+}
+
+bool ViewerModel::metrics_shown() const {
+  return shown(shown_methods_.front()).measured;
 }
 
 const Overlays& ViewerModel::overlays() {

@@ -130,8 +130,10 @@ class ViewerModel {
   /// in the background, by the methods of the last published frame until the worker catches up.
   const track::Positions& positions() const;
   const track::Positions* compare_positions() const;
-  /// Statistics and metrics of the shown frame by `method()`.
+  /// Statistics and metrics of the shown frame by `method()` (in the background the metrics of a
+  /// frame baked while a newer request waited are skipped: `metrics_shown()` is false).
   const skinning::FrameStats& stats() const;
+  bool metrics_shown() const;
   /// Overlays of the shown frame by `method()` (computed on first call per frame).
   const Overlays& overlays();
   /// Frames baked so far (editing steps and clip frames, every method): for tests and the panel.
@@ -155,6 +157,7 @@ class ViewerModel {
     std::vector<std::uint8_t> contact;
     std::vector<float> mask;
     Pose pose;  ///< the pose it was baked at
+    bool measured{true};  ///< stats.metrics computed (in the background: skipped while newer requests wait)
   };
   /// What the shown state needs baked: the edited pose, or a clip frame, for some methods.
   struct Request {
@@ -171,6 +174,7 @@ class ViewerModel {
   void refresh();
   std::map<Method, Frame> execute(const Request& r);
   void worker_loop();
+  bool newer_request() const;
   void push_undo();
   Pose pose_of(const std::vector<std::array<double, 3>>& angles) const;
 

@@ -1,0 +1,322 @@
+// SPDX-License-Identifier: MIT
+// The viewer's window and frame loop (GLFW + OpenGL 3.3 core + Dear ImGui), its script player and
+// report. A script is a JSON object {"events": [...]}, one event per frame:
+// - {"type": "move", "to": T, "frames": N}: the mouse to T in N steps (a drag while pressed);
+//   T = {"px": [x, y]}, {"joint": NAME} (its dot in the view), {"slider": "x"|"y"|"z"|"frame",
+//   "value": V} (the point of that slider for V: degrees, or a frame).
+// - {"type": "press"} / {"type": "release"}: a mouse button ("button": 0 left, 1 right, 2 middle).
+// - {"type": "wheel", "delta": D}; {"type": "frames", "n": N}; {"type": "wait_baked", "max_frames": N}.
+// - {"type": "set", "method": M, "compare": M | "none", "overlay": O, "clip": C, "frame": F}: as the
+//   combos and the timeline would.
+// - {"type": "screenshot", "name": NAME}: the window as SCREENSHOT_DIR/NAME.png, its state and pixel
+//   counts in the report.
+#define GLFW_INCLUDE_NONE
+#include <GL/gl.h>
+#include <GLFW/glfw3.h>
+#include <backends/imgui_impl_glfw.h>
+#include <backends/imgui_impl_opengl3.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "isokit/core/atomic_file.h"
+#include "isokit/core/error.h"
+#include "isokit/skinning/pipeline.h"
+#include "isokit/viewer/gui.h"
+#include "viewer_gui.h"
+
+namespace isokit::viewer {
+namespace {
+
+using nlohmann::json;
+using Clock = std::chrono::steady_clock;
+
+struct GlfwSession {
+  GlfwSession() {
+    glfwSetErrorCallback([](int code, const char* text) { std::fprintf(stderr, "glfw %d: %s\n", code, text); });
+    require(glfwInit() == GLFW_TRUE, "isokit-skin view", "cannot initialise GLFW (no display?)",
+            "run it on a desktop, or headless under xvfb-run -a");
+  }
+  ~GlfwSession() { glfwTerminate(); }
+};
+
+struct ImGuiSession {
+  explicit ImGuiSession(GLFWwindow* w) {
+    IMGUI_CHECKVERSION();
+    ImGui::CreateContext();
+    ImGui::GetIO().IniFilename = nullptr;
+    ImGui::StyleColorsDark();
+    ImGui_ImplGlfw_InitForOpenGL(w, true);
+    ImGui_ImplOpenGL3_Init("#version 330 core");
+  }
+  ~ImGuiSession() {
+    ImGui_ImplOpenGL3_Shutdown();
+    ImGui_ImplGlfw_Shutdown();
+    ImGui::DestroyContext();
+  }
+};
+
+GLFWwindow* open_window(const ViewerGuiOptions& o) {
+  glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 3);
+  glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 3);
+  glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
+  glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
+  glfwWindowHint(GLFW_RESIZABLE, o.script_path.empty() ? GLFW_TRUE : GLFW_FALSE);
+  GLFWwindow* w = glfwCreateWindow(o.width, o.height, "isokit skinning viewer", nullptr, nullptr);
+  require(w != nullptr, "isokit-skin view", "cannot open an OpenGL 3.3 window",
+          "check the display and the GL driver (headless: xvfb-run with Mesa's libgl1-mesa-dri)");
+  glfwMakeContextCurrent(w);
+  glfwSwapInterval(o.script_path.empty() ? 1 : 0);
+  return w;
+}
+
+skinning::Image read_framebuffer(GLFWwindow* w) {
+  int fw = 0, fh = 0;
+  glfwGetFramebufferSize(w, &fw, &fh);
+  skinning::Image img;
+  img.width = fw;
+  img.height = fh;
+  img.rgba.resize(4 * std::size_t(fw) * std::size_t(fh));
+  std::vector<std::uint8_t> raw(img.rgba.size());
+  glPixelStorei(GL_PACK_ALIGNMENT, 1);
+  glReadBuffer(GL_BACK);
+  glReadPixels(0, 0, fw, fh, GL_RGBA, GL_UNSIGNED_BYTE, raw.data());
+  const std::size_t row = 4 * std::size_t(fw);
+  for (int y = 0; y < fh; ++y) std::copy_n(raw.data() + row * std::size_t(fh - 1 - y), row, img.rgba.data() + row * std::size_t(y));
+  for (std::size_t i = 3; i < img.rgba.size(); i += 4) img.rgba[i] = 255;
+  return img;
+}
+
+/// Pixels of `img` inside `box` (x0, y0, x1, y1) within `tol` of colour `rgb` per channel.
+long count_colour(const skinning::Image& img, const ImVec4& box, const std::uint8_t* rgb, int tol) {
+  long n = 0;
+  for (int y = std::max(0, int(box.y)); y < std::min(img.height, int(box.w)); ++y)
+    for (int x = std::max(0, int(box.x)); x < std::min(img.width, int(box.z)); ++x) {
+      const std::uint8_t* p = img.rgba.data() + 4 * (std::size_t(y) * std::size_t(img.width) + std::size_t(x));
+      if (std::abs(p[0] - rgb[0]) <= tol && std::abs(p[1] - rgb[1]) <= tol && std::abs(p[2] - rgb[2]) <= tol) ++n;
+    }
+  return n;
+}
+
+/// The script: events, the one being played, and the mouse.
+class Player {
+ public:
+  Player(const std::string& path, GLFWwindow* w);
+  bool done() const { return next_ >= events_.size(); }
+  /// Feeds this frame's input to ImGui (before NewFrame); applies "set" events to the model.
+  void apply_input(ImGuiIO& io, const gui::Layout& layout, ViewerModel& model, gui::Panels& panels);
+  /// After the frame is drawn: the screenshot to take, if the event was one.
+  const json* finish_frame(const ViewerModel& model);
+  const std::vector<int>& drag_frames() const { return drag_frames_; }
+  std::vector<std::string> failures;
+
+ private:
+  ImVec2 target(const json& t, const gui::Layout& layout, const ViewerModel& model);
+  std::vector<json> events_;
+  std::size_t next_{0};
+  int step_{0}, frame_{0};
+  ImVec2 mouse_{10, 10}, from_{10, 10};
+  bool pressed_{false};
+  int button_{0};
+  std::vector<int> drag_frames_;
+};
+
+Player::Player(const std::string& path, GLFWwindow* w) {
+  std::ifstream in(path);
+  require(bool(in), path, "cannot be read", "check the script path");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  json j;
+  try {
+    j = json::parse(ss.str());
+  } catch (const json::exception& e) {
+    throw InputError(path + ": not valid JSON (" + e.what() + "); fix the script");
+  }
+  require(j.is_object() && j.contains("events") && j["events"].is_array(), path, "needs an \"events\" list",
+          "see apps/skinning/viewer/gui/window.cpp for the events");
+  for (const json& e : j["events"]) {
+    require(e.is_object() && e.contains("type") && e["type"].is_string(), path, "an event has no \"type\"",
+            "give each event a type");
+    events_.push_back(e);
+  }
+  (void)w;
+}
+
+ImVec2 Player::target(const json& t, const gui::Layout& layout, const ViewerModel& model) {
+  if (t.contains("px")) return ImVec2(t["px"][0].get<float>(), t["px"][1].get<float>());
+  if (t.contains("joint")) {
+    const int j = model.rig().joint_index(t["joint"].get<std::string>());
+    if (j >= 0 && std::size_t(j) < layout.joints.size()) return layout.joints[std::size_t(j)];
+    failures.push_back("no joint '" + t["joint"].get<std::string>() + "' in the view");
+    return mouse_;
+  }
+  const std::string s = t.value("slider", "");
+  const auto it = layout.sliders.find(s);
+  if (it == layout.sliders.end()) {
+    failures.push_back("no slider '" + s + "' on screen");
+    return mouse_;
+  }
+  const ImVec4 r = it->second;
+  const double v = t.value("value", 0.0);
+  const double u = s == "frame" ? v / std::max(1, model.frame_count() - 1) : (v + 180.0) / 360.0;
+  // The slider's value area is the item's width minus the label (about 15 px for one letter).
+  const float x0 = r.x + 6.f, x1 = r.z - 6.f - (s == "frame" ? 45.f : 15.f);
+  return ImVec2(x0 + float(std::clamp(u, 0.0, 1.0)) * (x1 - x0), 0.5f * (r.y + r.w));
+}
+
+void Player::apply_input(ImGuiIO& io, const gui::Layout& layout, ViewerModel& model, gui::Panels& panels) {
+  ++frame_;
+  if (done()) return;
+  const json& e = events_[next_];
+  const std::string type = e["type"].get<std::string>();
+  if (type == "move") {
+    const int n = std::max(1, e.value("frames", 1));
+    if (step_ == 0) from_ = mouse_;
+    ++step_;
+    const ImVec2 to = target(e["to"], layout, model);
+    const float t = float(step_) / float(n);
+    mouse_ = ImVec2(from_.x + t * (to.x - from_.x), from_.y + t * (to.y - from_.y));
+    if (pressed_) drag_frames_.push_back(frame_);
+  } else if (type == "press" || type == "release") {
+    pressed_ = type == "press";
+    button_ = std::clamp(e.value("button", 0), 0, 2);
+  } else if (type == "wheel") {
+    io.MouseWheel += e.value("delta", 0.f);
+  } else if (type == "set") {
+    if (e.contains("method")) model.set_method(skinning::method_from_string(e["method"].get<std::string>()));
+    if (e.contains("compare")) {
+      const std::string c = e["compare"].get<std::string>();
+      model.set_compare(c == "none" ? std::nullopt : std::optional<Method>(skinning::method_from_string(c)));
+    }
+    if (e.contains("overlay"))
+      for (int o = 0; o <= int(gui::Overlay::kDqsDistance); ++o)
+        if (e["overlay"].get<std::string>() == gui::to_string(gui::Overlay(o))) panels.set_overlay(gui::Overlay(o));
+    if (e.contains("clip")) model.play_clip(e["clip"].get<std::string>());
+    if (e.contains("frame")) model.set_frame(e["frame"].get<int>());
+  }
+  io.MousePos = mouse_;
+  // The GLFW backend sets the buttons from the real mouse each frame: the script's state wins.
+  for (int b = 0; b < 3; ++b) io.MouseDown[b] = pressed_ && b == button_;
+}
+
+const json* Player::finish_frame(const ViewerModel& model) {
+  if (done()) return nullptr;
+  const json& e = events_[next_];
+  const std::string type = e["type"].get<std::string>();
+  bool finished = true;
+  if (type == "move") finished = step_ >= std::max(1, e.value("frames", 1));
+  if (type == "frames") finished = ++step_ >= e.value("n", 1);
+  if (type == "wait_baked") finished = !model.pending() || ++step_ >= e.value("max_frames", 600);
+  if (!finished) return nullptr;
+  step_ = 0;
+  ++next_;
+  return type == "screenshot" ? &e : nullptr;
+}
+
+/// The state the gui test checks, with pixel counts of the shot.
+json shot_state(const json& e, const skinning::Image& img, const ViewerModel& model, const gui::Panels& panels,
+                const std::string& file) {
+  const gui::Layout& l = panels.layout();
+  const ImVec4 view(l.view_min.x, l.view_min.y, l.view_max.x, l.view_max.y);
+  const std::uint8_t red[3] = {std::uint8_t(255 * 0.97f), 30, 30};
+  const int j = model.selected_joint();
+  json angles = j >= 0 ? json(model.joint_angles(j)) : json(nullptr);
+  const track::Positions& p = model.positions();
+  return {{"name", e.value("name", "")},
+          {"file", file},
+          {"selected", j >= 0 ? json(model.rig().joints[std::size_t(j)].name) : json(nullptr)},
+          {"angles", angles},
+          {"method", skinning::to_string(model.method())},
+          {"overlay", gui::to_string(panels.overlay())},
+          {"clip", model.clip()},
+          {"frame", model.frame()},
+          {"pending", model.pending()},
+          {"positions_sum", double(p.cast<double>().sum())},
+          {"selected_pixels", count_colour(img, view, gui::kSelectedRgb, 20)},
+          {"joint_pixels", count_colour(img, view, gui::kJointRgb, 20)},
+          {"overlay_pixels", count_colour(img, view, red, 60)},
+          {"view", {view.x, view.y, view.z, view.w}}};
+}
+
+}  // namespace
+
+int run_viewer(const ViewerGuiOptions& o) {
+  std::unique_ptr<Player> player;
+  GlfwSession glfw;  // first: without a display, fail before fitting anything
+  const skinning::SkinSetup setup = o.setup.empty() ? skinning::SkinSetup{} : skinning::load_setup(o.setup);
+  auto skinner = std::make_shared<skinning::Skinner>(skinning::open_rig(o.rig, 30, {}, nullptr, setup.mask), setup);
+  ViewerOptions vo;
+  vo.background = true;
+  vo.self_intersections = true;
+  ViewerModel model(skinner, skinning::method_from_string(o.method), vo);
+  if (!o.clip.empty()) model.play_clip(o.clip), model.wait_idle();
+  GLFWwindow* window = open_window(o);
+  ImGuiSession imgui(window);
+  if (!o.script_path.empty()) player = std::make_unique<Player>(o.script_path, window);
+  gui::Panels panels(model);
+  json shots = json::array();
+  std::vector<double> frame_ms;
+  std::vector<long> requested, shown;
+  while (!glfwWindowShouldClose(window) && !(player && player->done())) {
+    const auto t0 = Clock::now();
+    glfwPollEvents();
+    ImGui_ImplOpenGL3_NewFrame();
+    ImGui_ImplGlfw_NewFrame();
+    if (player) player->apply_input(ImGui::GetIO(), panels.layout(), model, panels);
+    ImGui::NewFrame();
+    int fw = 0, fh = 0;
+    glfwGetFramebufferSize(window, &fw, &fh);
+    panels.draw(fw, fh);
+    ImGui::Render();
+    glViewport(0, 0, fw, fh);
+    glClearColor(0.06f, 0.06f, 0.07f, 1.f);
+    glClear(GL_COLOR_BUFFER_BIT);
+    ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
+    if (player)
+      if (const json* e = player->finish_frame(model)) {
+        const std::string file = o.screenshot_dir + "/" + e->value("name", "shot") + ".png";
+        const skinning::Image img = read_framebuffer(window);
+        skinning::write_png(img, file);
+        shots.push_back(shot_state(*e, img, model, panels, file));
+      }
+    glfwSwapBuffers(window);
+    requested.push_back(model.request_id());
+    shown.push_back(model.shown_id());
+    frame_ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+  }
+  if (player) {
+    // Lag of each drag frame: frames since the request now shown was made.
+    std::vector<int> lag;
+    for (const int f : player->drag_frames()) {
+      const std::size_t k = std::size_t(std::min<int>(f, int(shown.size())) - 1);
+      std::size_t g = 0;
+      while (g < k && requested[g] < shown[k]) ++g;
+      lag.push_back(int(k - g));
+    }
+    std::vector<double> drag_ms;
+    for (const int f : player->drag_frames())
+      if (f - 1 < int(frame_ms.size())) drag_ms.push_back(frame_ms[std::size_t(f - 1)]);
+    std::sort(drag_ms.begin(), drag_ms.end());
+    const double median = drag_ms.empty() ? 0.0 : drag_ms[drag_ms.size() / 2];
+    const json report = {{"screenshots", shots},
+                         {"script_failures", player->failures},
+                         {"drag", {{"frames", drag_ms.size()},
+                                   {"frame_ms_median", median},
+                                   {"fps", median > 0 ? 1000.0 / median : 0.0},
+                                   {"lag_frames_max", lag.empty() ? 0 : *std::max_element(lag.begin(), lag.end())}}},
+                         {"frames", frame_ms.size()},
+                         {"message", panels.message()},
+                         {"gl_renderer", reinterpret_cast<const char*>(glGetString(GL_RENDERER))}};
+    const std::string path = o.report_path.empty() ? o.screenshot_dir + "/viewer-report.json" : o.report_path;
+    write_text_file_atomically(path, report.dump(1) + "\n");
+    for (const std::string& f : player->failures) std::fprintf(stderr, "isokit-skin view: script: %s\n", f.c_str());
+  }
+  glfwDestroyWindow(window);
+  return player && !player->failures.empty() ? 2 : 0;
+}
+
+}  // namespace isokit::viewer
