@@ -12,7 +12,7 @@ EVAL_ARGS  ?=
 JOBS       ?= $(shell nproc)
 CMAKE_ARGS ?=
 
-.PHONY: all deps configure build demo eval test test-release test-asan bench bench-studio fuzz blender-addon clean
+.PHONY: all deps configure build demo eval test test-release test-asan bench bench-studio bench-view fuzz blender-addon clean
 
 all: build
 
@@ -75,6 +75,11 @@ bench: build
 # from the same session (re-solve ms, input-to-redraw latency in frames, fps; docs/performance.md).
 bench-studio: build
 	bench/studio/studio-bench.py $(BUILD) --runs 5
+
+# The skinning viewer under Xvfb: a recorded elbow drag on CesiumMan with tracking2014, 3 runs
+# (redraw rate and the lag of the skin shown behind the slider; docs/performance.md).
+bench-view: build
+	bench/viewer/view-bench.sh $(BUILD) 3
 
 # libFuzzer targets (clang, ASan + UBSan; docs/fuzzing.md): builds them in $(FUZZ_BUILD), writes
 # the seed corpora with the project's own writers, runs each target for $(FUZZ_SECONDS) s, one at a
