@@ -5,6 +5,7 @@
 #include <catch2/catch.hpp>
 
 #include <filesystem>
+#include <fstream>
 #include <random>
 
 #include "isokit/core/error.h"
@@ -12,6 +13,7 @@
 #include "isokit/skinning/deform.h"
 #include "isokit/skinning/metrics.h"
 #include "isokit/skinning/procedural.h"
+#include "isokit/skinning/rig_io.h"
 #include "isokit/viewer/model.h"
 
 using namespace isokit;
@@ -218,4 +220,24 @@ TEST_CASE("viewer: baking in the background shows the last finished frame, then 
   CHECK(*a.compare_positions() == sk->bake(Method::kDqs, poses, quick_bake()).frames[5]);
   const viewer::Overlays& o = a.overlays();
   CHECK(o.dqs_distance.size() == static_cast<std::size_t>(sk->rig().rest.rows()));
+}
+
+TEST_CASE("viewer: a clip exported from the viewer is the glb bake writes", "[viewer][unit]") {
+  auto sk = cylinder();
+  ViewerModel m(sk, Method::kTracking2014, quick());
+  CHECK_THROWS_WITH(m.export_clip("x.glb"), Catch::Contains("no clip"));
+  m.play_clip("bend");
+  m.set_frame(3);
+  const auto dir = std::filesystem::temp_directory_path() / ("isokit_viewer_export_" + std::to_string(std::random_device{}()));
+  std::filesystem::create_directories(dir);
+  m.export_clip((dir / "viewer.glb").string());
+  CHECK(m.frame() == 3);  // the shown frame stays
+  const BakeResult b = sk->bake(Method::kTracking2014, sk->rig().clips[0].local, quick_bake());
+  write_baked_glb(sk->rig(), b.frames, sk->rig().clips[0].fps, (dir / "bake.glb").string());
+  auto bytes = [](const std::filesystem::path& p) {
+    std::ifstream in(p, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  };
+  CHECK(bytes(dir / "viewer.glb") == bytes(dir / "bake.glb"));
+  std::filesystem::remove_all(dir);
 }

@@ -14,6 +14,7 @@
 #include "isokit/skinning/animation.h"
 #include "isokit/skinning/deform.h"
 #include "isokit/skinning/metrics.h"
+#include "isokit/skinning/rig_io.h"
 
 namespace isokit::viewer {
 
@@ -234,6 +235,22 @@ void ViewerModel::stop_clip() {
   if (clip_.empty()) return;
   clip_.clear();
   refresh();
+}
+
+void ViewerModel::export_clip(const std::string& glb_path) {
+  require(!clip_.empty(), "viewer: export", "no clip is playing", "choose a clip first");
+  const int shown_frame = frame_;
+  frame_ = frame_count() - 1;
+  refresh();  // bakes (or asks the worker for) every frame up to the last
+  wait_idle();
+  std::vector<track::Positions> frames;
+  for (const Frame& f : tracks_.at(method_)->clip_frames) frames.push_back(f.positions);  // the worker is idle
+  const auto clip = std::find_if(rig().clips.begin(), rig().clips.end(),
+                                 [&](const skinning::Clip& c) { return c.name == clip_; });
+  skinning::write_baked_glb(rig(), frames, clip->fps, glb_path);
+  frame_ = shown_frame;
+  refresh();
+  wait_idle();
 }
 
 void ViewerModel::set_method(Method m) {

@@ -176,6 +176,16 @@ void Panels::draw_clip_panel() {
     if (ImGui::SliderInt("frame", &f, 0, model_.frame_count() - 1)) model_.set_frame(f);
     const ImVec2 lo = ImGui::GetItemRectMin(), hi = ImGui::GetItemRectMax();
     layout_.sliders["frame"] = ImVec4(lo.x, lo.y, hi.x, hi.y);
+    ImGui::InputText("##bake", bake_path_, sizeof(bake_path_));
+    ImGui::SameLine();
+    if (ImGui::Button("bake clip")) {
+      try {
+        model_.export_clip(bake_path_);
+        message_ = std::string("wrote ") + bake_path_ + " (" + skinning::to_string(model_.method()) + ")";
+      } catch (const std::exception& e) {
+        message_ = e.what();
+      }
+    }
   }
 }
 

@@ -91,6 +91,7 @@ class Panels {
   std::vector<int> renders_;
   std::string message_;
   char pose_path_[512] = "pose.json";
+  char bake_path_[512] = "clip.glb";
 };
 
 }  // namespace isokit::viewer::gui

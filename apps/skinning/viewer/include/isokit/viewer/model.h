@@ -117,6 +117,11 @@ class ViewerModel {
   void set_frame(int f);
   /// Back to editing, at the last edited pose.
   void stop_clip();
+  /// Bakes every frame of the clip played by `method()` (the cached frames and the rest) and
+  /// writes them as `isokit-skin bake --out` does (one morph target per frame, at the clip's fps);
+  /// the shown frame stays. Returns when written. \throw InputError without a clip, or naming the
+  /// file.
+  void export_clip(const std::string& glb_path);
 
   // ---- Methods.
   Method method() const { return method_; }
