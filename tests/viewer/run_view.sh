@@ -1,8 +1,10 @@
 #!/bin/sh
 # The viewer's `gui` test: isokit-skin view under Xvfb (Mesa software GL) replays
 # tests/viewer/view_drag.json — a click on a joint in the view, a drag of its x slider to 145°, the
-# DQS method with the self-intersection overlay — then checks the report: the joint is selected
-# and highlighted, the slider turned it, the mesh moved, the overlay shows DQS's self-intersections.
+# DQS method with the self-intersection overlay, a missing file and then the procedural finger
+# opened — then checks the report: the joint is selected and highlighted, the slider turned it, the
+# mesh moved, the overlay shows DQS's self-intersections, the missing file's error is shown, the
+# finger replaces the cylinder.
 # Exits 77 (CTest: skipped) without xvfb-run. With ISOKIT_UPDATE_DOC_IMAGES=1 the screenshots go
 # to docs/figures/ (the pictures of docs/skinning.md, "The viewer").
 # Usage: run_view.sh EXE SCRIPT OUT DOC_IMAGES
@@ -29,6 +31,10 @@ checks = [
     (abs(shots["view-bent"]["positions_sum"] - shots["view-rest"]["positions_sum"]) > 1, "the mesh moved"),
     (shots["view-dqs-intersections"]["method"] == "dqs", "the method switched to dqs"),
     (shots["view-dqs-intersections"]["overlay_pixels"] > 50, "the overlay shows DQS's self-intersections"),
+    ("nonexistent" in shots["view-open-error"]["message"] and shots["view-open-error"]["joints"] == 2,
+     "opening a missing file shows its error and keeps the rig"),
+    (shots["view-opened"]["joints"] == 4 and shots["view-opened"]["joint_pixels"] > 20,
+     "opening another rig (the procedural finger) shows it"),
 ]
 for ok, what in checks:
     print(("ok  : " if ok else "FAIL: ") + what)

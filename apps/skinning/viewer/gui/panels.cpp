@@ -92,7 +92,16 @@ void Panels::draw_side_panel() {
   if (!message_.empty()) ImGui::TextWrapped("%s", message_.c_str());
 }
 
+std::optional<std::string> Panels::take_open_request() {
+  std::optional<std::string> r;
+  r.swap(open_request_);
+  return r;
+}
+
 void Panels::draw_method_panel() {
+  ImGui::InputText("##open", open_path_, sizeof(open_path_));
+  ImGui::SameLine();
+  if (ImGui::Button("open") && open_path_[0] != '\0') open_request_ = std::string(open_path_);
   const std::vector<Method> methods = skinning::all_methods();
   int m = int(std::find(methods.begin(), methods.end(), model_.method()) - methods.begin());
   std::vector<const char*> names;

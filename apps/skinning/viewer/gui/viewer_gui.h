@@ -8,6 +8,7 @@
 #include <array>
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -64,6 +65,10 @@ class Panels {
   const std::vector<int>& renders() const { return renders_; }
   int frame() const { return frame_; }
   const std::string& message() const { return message_; }
+  void set_message(std::string m) { message_ = std::move(m); }
+  /// The file the user asked to open this frame (the window loads it, then replaces the model).
+  std::optional<std::string> take_open_request();
+  void request_open(std::string path) { open_request_ = std::move(path); }
 
  private:
   void draw_side_panel();
@@ -92,6 +97,8 @@ class Panels {
   std::string message_;
   char pose_path_[512] = "pose.json";
   char bake_path_[512] = "clip.glb";
+  char open_path_[512] = "";
+  std::optional<std::string> open_request_;
 };
 
 }  // namespace isokit::viewer::gui

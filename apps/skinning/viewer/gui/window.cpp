@@ -6,8 +6,8 @@
 //   "value": V} (the point of that slider for V: degrees, or a frame).
 // - {"type": "press"} / {"type": "release"}: a mouse button ("button": 0 left, 1 right, 2 middle).
 // - {"type": "wheel", "delta": D}; {"type": "frames", "n": N}; {"type": "wait_baked", "max_frames": N}.
-// - {"type": "set", "method": M, "compare": M | "none", "overlay": O, "clip": C, "frame": F}: as the
-//   combos and the timeline would.
+// - {"type": "set", "method": M, "compare": M | "none", "overlay": O, "clip": C, "frame": F,
+//   "open": PATH}: as the combos, the timeline and the open field would.
 // - {"type": "screenshot", "name": NAME}: the window as SCREENSHOT_DIR/NAME.png, its state and pixel
 //   counts in the report.
 #define GLFW_INCLUDE_NONE
@@ -22,6 +22,9 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <atomic>
+#include <mutex>
+#include <thread>
 
 #include "isokit/core/atomic_file.h"
 #include "isokit/core/error.h"
@@ -197,6 +200,7 @@ void Player::apply_input(ImGuiIO& io, const gui::Layout& layout, ViewerModel& mo
         if (e["overlay"].get<std::string>() == gui::to_string(gui::Overlay(o))) panels.set_overlay(gui::Overlay(o));
     if (e.contains("clip")) model.play_clip(e["clip"].get<std::string>());
     if (e.contains("frame")) model.set_frame(e["frame"].get<int>());
+    if (e.contains("open")) panels.request_open(e["open"].get<std::string>());
   }
   io.MousePos = mouse_;
   // The GLFW backend sets the buttons from the real mouse each frame: the script's state wins.
@@ -235,6 +239,8 @@ json shot_state(const json& e, const skinning::Image& img, const ViewerModel& mo
           {"clip", model.clip()},
           {"frame", model.frame()},
           {"pending", model.pending()},
+          {"message", panels.message()},
+          {"joints", model.rig().joints.size()},
           {"positions_sum", double(p.cast<double>().sum())},
           {"selected_pixels", count_colour(img, view, gui::kSelectedRgb, 20)},
           {"joint_pixels", count_colour(img, view, gui::kJointRgb, 20)},
@@ -242,22 +248,111 @@ json shot_state(const json& e, const skinning::Image& img, const ViewerModel& mo
           {"view", {view.x, view.y, view.z, view.w}}};
 }
 
+/// A rig opened from the window: read and fitted on its own thread, with its progress and its
+/// error for the window to show.
+class Opener {
+ public:
+  Opener(std::string path, std::string setup_path, Method method)
+      : path_(std::move(path)), thread_([this, setup_path, method] { run(setup_path, method); }) {}
+  ~Opener() { thread_.join(); }
+  bool done() const { return done_; }
+  std::string progress() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return stage_;
+  }
+  /// The finished model, or the one-line error (after done()).
+  std::unique_ptr<ViewerModel>& model() { return model_; }
+  const std::string& error() const { return error_; }
+  const std::string& path() const { return path_; }
+
+ private:
+  void run(const std::string& setup_path, Method method) {
+    try {
+      const skinning::SkinSetup setup = setup_path.empty() ? skinning::SkinSetup{} : skinning::load_setup(setup_path);
+      const skinning::Progress progress = [this](const std::string& stage, int done, int total) {
+        std::lock_guard<std::mutex> lock(mutex_);
+        stage_ = stage + " " + std::to_string(done) + " / " + std::to_string(total);
+      };
+      auto sk = std::make_shared<skinning::Skinner>(skinning::open_rig(path_, 30, progress, nullptr, setup.mask),
+                                                    setup, progress);
+      ViewerOptions vo;
+      vo.background = true;
+      model_ = std::make_unique<ViewerModel>(sk, method, vo);
+    } catch (const std::exception& e) {
+      error_ = e.what();
+    }
+    done_ = true;
+  }
+  std::string path_;
+  mutable std::mutex mutex_;
+  std::string stage_{"reading"};
+  std::unique_ptr<ViewerModel> model_;
+  std::string error_;
+  std::atomic<bool> done_{false};
+  std::thread thread_;
+};
+
+/// While a rig is being opened: a small window with the stage and its progress.
+void draw_opening(const Opener& opener) {
+  ImGui::SetNextWindowPos(ImVec2(360, 20));
+  ImGui::Begin("opening", nullptr, ImGuiWindowFlags_AlwaysAutoResize | ImGuiWindowFlags_NoCollapse);
+  ImGui::Text("opening %s", opener.path().c_str());
+  ImGui::Text("%s", opener.progress().c_str());
+  ImGui::End();
+}
+
+/// The script's report: the screenshots, the drag's redraw rate and the lag of the skin shown.
+json report_of(const Player& player, const json& shots, const std::vector<double>& frame_ms,
+               const std::vector<long>& requested, const std::vector<long>& shown, const gui::Panels& panels) {
+  std::vector<int> lag;  // per drag frame: frames since the request now shown was made
+  std::vector<double> drag_ms;
+  for (const int f : player.drag_frames()) {
+    const std::size_t k = std::size_t(std::min<int>(f, int(shown.size())) - 1);
+    std::size_t g = 0;
+    while (g < k && requested[g] < shown[k]) ++g;
+    lag.push_back(int(k - g));
+    if (k < frame_ms.size()) drag_ms.push_back(frame_ms[k]);
+  }
+  std::sort(drag_ms.begin(), drag_ms.end());
+  const double median = drag_ms.empty() ? 0.0 : drag_ms[drag_ms.size() / 2];
+  return {{"screenshots", shots},
+          {"script_failures", player.failures},
+          {"drag", {{"frames", drag_ms.size()},
+                    {"frame_ms_median", median},
+                    {"fps", median > 0 ? 1000.0 / median : 0.0},
+                    {"lag_frames_max", lag.empty() ? 0 : *std::max_element(lag.begin(), lag.end())}}},
+          {"frames", frame_ms.size()},
+          {"message", panels.message()},
+          {"gl_renderer", reinterpret_cast<const char*>(glGetString(GL_RENDERER))}};
+}
+
+/// The model of the rig on the command line (read and fitted before the window opens).
+std::unique_ptr<ViewerModel> initial_model(const ViewerGuiOptions& o) {
+  const skinning::SkinSetup setup = o.setup.empty() ? skinning::SkinSetup{} : skinning::load_setup(o.setup);
+  const skinning::Progress progress = [](const std::string& stage, int done, int total) {
+    std::fprintf(stderr, "\r  %-24s %d / %d", stage.c_str(), done, total);
+    if (done == total) std::fprintf(stderr, "\n");
+  };
+  auto skinner = std::make_shared<skinning::Skinner>(
+      skinning::open_rig(o.rig, 30, progress, nullptr, setup.mask), setup, progress);
+  ViewerOptions vo;
+  vo.background = true;
+  auto model = std::make_unique<ViewerModel>(skinner, skinning::method_from_string(o.method), vo);
+  if (!o.clip.empty()) model->play_clip(o.clip), model->wait_idle();
+  return model;
+}
+
 }  // namespace
 
 int run_viewer(const ViewerGuiOptions& o) {
-  std::unique_ptr<Player> player;
   GlfwSession glfw;  // first: without a display, fail before fitting anything
-  const skinning::SkinSetup setup = o.setup.empty() ? skinning::SkinSetup{} : skinning::load_setup(o.setup);
-  auto skinner = std::make_shared<skinning::Skinner>(skinning::open_rig(o.rig, 30, {}, nullptr, setup.mask), setup);
-  ViewerOptions vo;
-  vo.background = true;
-  vo.self_intersections = true;
-  ViewerModel model(skinner, skinning::method_from_string(o.method), vo);
-  if (!o.clip.empty()) model.play_clip(o.clip), model.wait_idle();
+  std::unique_ptr<ViewerModel> model = initial_model(o);
   GLFWwindow* window = open_window(o);
   ImGuiSession imgui(window);
+  std::unique_ptr<Player> player;
   if (!o.script_path.empty()) player = std::make_unique<Player>(o.script_path, window);
-  gui::Panels panels(model);
+  auto panels = std::make_unique<gui::Panels>(*model);
+  std::unique_ptr<Opener> opener;
   json shots = json::array();
   std::vector<double> frame_ms;
   std::vector<long> requested, shown;
@@ -266,53 +361,44 @@ int run_viewer(const ViewerGuiOptions& o) {
     glfwPollEvents();
     ImGui_ImplOpenGL3_NewFrame();
     ImGui_ImplGlfw_NewFrame();
-    if (player) player->apply_input(ImGui::GetIO(), panels.layout(), model, panels);
+    if (player) player->apply_input(ImGui::GetIO(), panels->layout(), *model, *panels);
     ImGui::NewFrame();
     int fw = 0, fh = 0;
     glfwGetFramebufferSize(window, &fw, &fh);
-    panels.draw(fw, fh);
+    panels->draw(fw, fh);
+    if (auto path = panels->take_open_request(); path && !opener)
+      opener = std::make_unique<Opener>(*path, o.setup, model->method());
+    if (opener) draw_opening(*opener);
     ImGui::Render();
     glViewport(0, 0, fw, fh);
     glClearColor(0.06f, 0.06f, 0.07f, 1.f);
     glClear(GL_COLOR_BUFFER_BIT);
     ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
     if (player)
-      if (const json* e = player->finish_frame(model)) {
+      if (const json* e = player->finish_frame(*model)) {
         const std::string file = o.screenshot_dir + "/" + e->value("name", "shot") + ".png";
         const skinning::Image img = read_framebuffer(window);
         skinning::write_png(img, file);
-        shots.push_back(shot_state(*e, img, model, panels, file));
+        shots.push_back(shot_state(*e, img, *model, *panels, file));
       }
     glfwSwapBuffers(window);
-    requested.push_back(model.request_id());
-    shown.push_back(model.shown_id());
+    if (opener && opener->done()) {  // the opened rig replaces the shown one, or its error is shown
+      if (opener->model()) {
+        panels.reset();
+        model = std::move(opener->model());
+        panels = std::make_unique<gui::Panels>(*model);
+      } else {
+        panels->set_message(opener->error());  // names the file
+      }
+      opener.reset();
+    }
+    requested.push_back(model->request_id());
+    shown.push_back(model->shown_id());
     frame_ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
   }
   if (player) {
-    // Lag of each drag frame: frames since the request now shown was made.
-    std::vector<int> lag;
-    for (const int f : player->drag_frames()) {
-      const std::size_t k = std::size_t(std::min<int>(f, int(shown.size())) - 1);
-      std::size_t g = 0;
-      while (g < k && requested[g] < shown[k]) ++g;
-      lag.push_back(int(k - g));
-    }
-    std::vector<double> drag_ms;
-    for (const int f : player->drag_frames())
-      if (f - 1 < int(frame_ms.size())) drag_ms.push_back(frame_ms[std::size_t(f - 1)]);
-    std::sort(drag_ms.begin(), drag_ms.end());
-    const double median = drag_ms.empty() ? 0.0 : drag_ms[drag_ms.size() / 2];
-    const json report = {{"screenshots", shots},
-                         {"script_failures", player->failures},
-                         {"drag", {{"frames", drag_ms.size()},
-                                   {"frame_ms_median", median},
-                                   {"fps", median > 0 ? 1000.0 / median : 0.0},
-                                   {"lag_frames_max", lag.empty() ? 0 : *std::max_element(lag.begin(), lag.end())}}},
-                         {"frames", frame_ms.size()},
-                         {"message", panels.message()},
-                         {"gl_renderer", reinterpret_cast<const char*>(glGetString(GL_RENDERER))}};
     const std::string path = o.report_path.empty() ? o.screenshot_dir + "/viewer-report.json" : o.report_path;
-    write_text_file_atomically(path, report.dump(1) + "\n");
+    write_text_file_atomically(path, report_of(*player, shots, frame_ms, requested, shown, *panels).dump(1) + "\n");
     for (const std::string& f : player->failures) std::fprintf(stderr, "isokit-skin view: script: %s\n", f.c_str());
   }
   glfwDestroyWindow(window);
