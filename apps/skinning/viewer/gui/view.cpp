@@ -68,7 +68,12 @@ void Panels::draw_view(const ImVec2& at, const ImVec2& size) {
                ImGuiWindowFlags_NoDecoration | ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoBringToFrontOnFocus);
   const bool beside = model_.compare().has_value();
   const int w = int(size.x) / (beside ? 2 : 1), h = int(size.y);
-  if (dirty_ || rendered_id_ != model_.shown_id() || w != rendered_w_ || h != rendered_h_) render_view(w, h);
+  // During a slider drag the view is rendered at half resolution: the software rasterizer then
+  // leaves the cores to the tracker (the skin shown lags less), and the full view follows the drag.
+  const int div = model_.dragging() ? 2 : 1;
+  if (dirty_ || rendered_id_ != model_.shown_id() || w / div != rendered_w_ || h / div != rendered_h_)
+    render_view(w / div, h / div);
+  pixel_scale_ = float(w) / float(std::max(rendered_w_, 1));
   ImGui::Image(texture_.id(), ImVec2(float(w), float(h)));
   layout_.view_min = at;
   layout_.view_max = ImVec2(at.x + float(w), at.y + float(h));
@@ -92,7 +97,7 @@ void Panels::draw_joints(ImDrawList* dl, const ImVec2& at, const skinning::Camer
   layout_.joints.assign(p.size(), ImVec2(-1e6f, -1e6f));
   for (std::size_t j = 0; j < p.size(); ++j) {
     const Eigen::Vector3d s = camera.project(p[j]);
-    if (s.z() > 0) layout_.joints[j] = ImVec2(at.x + float(s.x()), at.y + float(s.y()));
+    if (s.z() > 0) layout_.joints[j] = ImVec2(at.x + pixel_scale_ * float(s.x()), at.y + pixel_scale_ * float(s.y()));
   }
   const skinning::Rig& rig = model_.rig();
   const ImU32 bone = IM_COL32(kJointRgb[0], kJointRgb[1], kJointRgb[2], 200);

@@ -87,6 +87,7 @@ class Panels {
   Layout layout_;
   Texture texture_, texture_beside_;
   skinning::Camera camera_;
+  float pixel_scale_{1.f};  ///< screen pixels per rendered pixel
   Eigen::AlignedBox3d box_;
   long rendered_id_{-1};
   int rendered_w_{0}, rendered_h_{0};

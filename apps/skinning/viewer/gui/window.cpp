@@ -303,7 +303,8 @@ void draw_opening(const Opener& opener) {
 
 /// The script's report: the screenshots, the drag's redraw rate and the lag of the skin shown.
 json report_of(const Player& player, const json& shots, const std::vector<double>& frame_ms,
-               const std::vector<long>& requested, const std::vector<long>& shown, const gui::Panels& panels) {
+               const std::vector<long>& requested, const std::vector<long>& shown, std::vector<double> bake_ms,
+               const gui::Panels& panels) {
   std::vector<int> lag;  // per drag frame: frames since the request now shown was made
   std::vector<double> drag_ms;
   for (const int f : player.drag_frames()) {
@@ -320,7 +321,10 @@ json report_of(const Player& player, const json& shots, const std::vector<double
           {"drag", {{"frames", drag_ms.size()},
                     {"frame_ms_median", median},
                     {"fps", median > 0 ? 1000.0 / median : 0.0},
-                    {"lag_frames_max", lag.empty() ? 0 : *std::max_element(lag.begin(), lag.end())}}},
+                    {"lag_frames_max", lag.empty() ? 0 : *std::max_element(lag.begin(), lag.end())},
+                    {"lag_frames", lag},
+                    {"bake_ms_median", bake_ms.empty() ? 0.0 : (std::sort(bake_ms.begin(), bake_ms.end()),
+                                                                bake_ms[bake_ms.size() / 2])}}},
           {"frames", frame_ms.size()},
           {"message", panels.message()},
           {"gl_renderer", reinterpret_cast<const char*>(glGetString(GL_RENDERER))}};
@@ -356,6 +360,7 @@ int run_viewer(const ViewerGuiOptions& o) {
   json shots = json::array();
   std::vector<double> frame_ms;
   std::vector<long> requested, shown;
+  std::vector<double> bake_ms;  // the deformation time of each new frame shown
   while (!glfwWindowShouldClose(window) && !(player && player->done())) {
     const auto t0 = Clock::now();
     glfwPollEvents();
@@ -392,13 +397,14 @@ int run_viewer(const ViewerGuiOptions& o) {
       }
       opener.reset();
     }
+    if (shown.empty() || model->shown_id() != shown.back()) bake_ms.push_back(model->stats().ms);
     requested.push_back(model->request_id());
     shown.push_back(model->shown_id());
     frame_ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
   }
   if (player) {
     const std::string path = o.report_path.empty() ? o.screenshot_dir + "/viewer-report.json" : o.report_path;
-    write_text_file_atomically(path, report_of(*player, shots, frame_ms, requested, shown, *panels).dump(1) + "\n");
+    write_text_file_atomically(path, report_of(*player, shots, frame_ms, requested, shown, bake_ms, *panels).dump(1) + "\n");
     for (const std::string& f : player->failures) std::fprintf(stderr, "isokit-skin view: script: %s\n", f.c_str());
   }
   glfwDestroyWindow(window);
