@@ -47,7 +47,8 @@ void Pose::require_fits(const Program& program) const {
           "make the pose from the program it is used with: Pose(program)");
 }
 
-void Pose::set_leaf_transform(const Program& program, std::size_t leaf, const Rigid3f& xf, const Vec3f& scale) {
+void Pose::set_leaf_transform(const Program& program, std::size_t leaf, const Rigid3f& xf,
+                              const Vec3f& scale) {
   require_fits(program);
   require(leaf < leaves_.size(), "pose leaf " + std::to_string(leaf),
           "is out of range (" + std::to_string(leaves_.size()) + " leaves)",

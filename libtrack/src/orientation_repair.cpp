@@ -143,7 +143,8 @@ int OrientationRepair::repair_round(const std::vector<int>& verts) {
   int moves = 0;
   for (std::size_t a = 0; a < m; ++a) {
     const int v = verts[a];
-    if (s_.flags.lost[v] || (!movable.empty() && !movable[v]) || stuck_[v] || s_.pinned(std::size_t(v))) continue;
+    if (s_.flags.lost[v] || (!movable.empty() && !movable[v]) || stuck_[v] || s_.pinned(std::size_t(v)))
+      continue;
     if (repair_vertex(v, vg[a])) ++moves;
   }
   return moves;

@@ -31,7 +31,7 @@ struct TangentProblem {
   /// `Σj wij k_i / (1 − k_i) (a_i − p_i − d_i)` (IsoSurfaceTracker::set_anchor_stiffness).
   const float* anchor_k{nullptr};
   const Vec3f* anchors{nullptr};
-  float tolerance{0};           ///< stop when every |r_i| / diag_i is below this (a Jacobi step)
+  float tolerance{0};  ///< stop when every |r_i| / diag_i is below this (a Jacobi step)
   int max_iterations{100};
 };
 

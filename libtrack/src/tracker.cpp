@@ -104,7 +104,8 @@ void IsoSurfaceTracker::set_anchor_stiffness(std::vector<float> stiffness) {
   // Pinned vertices have no unknowns in the global solve: its factor follows the pinned set.
   auto pinned = [](const std::vector<float>& k, std::size_t i) { return !k.empty() && k[i] >= 1.f; };
   bool same = true;
-  for (std::size_t i = 0; i < m.mask.size() && same; ++i) same = pinned(stiffness, i) == pinned(m.anchor_k, i);
+  for (std::size_t i = 0; i < m.mask.size() && same; ++i)
+    same = pinned(stiffness, i) == pinned(m.anchor_k, i);
   m.anchor_k = std::move(stiffness);
   if (!same) m.global.reset();
 }

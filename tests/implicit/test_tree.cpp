@@ -570,9 +570,9 @@ TEST_CASE("a leaf posed with a scale is its field stretched along its local axes
   const auto sphere = std::make_shared<const SphereField>(Vec3f{0, 0, 0}, 1.0f);
   const auto cap = std::make_shared<const CapsuleField>(Vec3f{0, 0, 0}, Vec3f{0, 0, 1}, 0.3f);
   const Rigid3f at_cap = random_rigid(rng, 0.5);
-  const auto program = std::make_shared<const Program>(CompositionTree::node(
-      NodeOperator::max(), CompositionTree::leaf(sphere, Rigid3f{}, 0),
-      CompositionTree::leaf(cap, at_cap, 1)));
+  const auto program = std::make_shared<const Program>(
+      CompositionTree::node(NodeOperator::max(), CompositionTree::leaf(sphere, Rigid3f{}, 0),
+                            CompositionTree::leaf(cap, at_cap, 1)));
   auto pose = std::make_shared<Pose>(*program);
   const Rigid3f T = random_rigid(rng, 1.0);
   const Vec3f S{1.5f, 0.6f, 0.9f};
@@ -605,7 +605,8 @@ TEST_CASE("a leaf posed with a scale is its field stretched along its local axes
     // The world box holds every point with a value.
     if (s.value > 0.f) {
       const Box3f b = pose->support();
-      REQUIRE((p.x >= b.lo.x && p.y >= b.lo.y && p.z >= b.lo.z && p.x <= b.hi.x && p.y <= b.hi.y && p.z <= b.hi.z));
+      REQUIRE((p.x >= b.lo.x && p.y >= b.lo.y && p.z >= b.lo.z && p.x <= b.hi.x && p.y <= b.hi.y &&
+               p.z <= b.hi.z));
     }
   }
   CHECK(inside > 100);
@@ -629,7 +630,8 @@ TEST_CASE("a leaf posed with a scale is its field stretched along its local axes
   const Mat3f& ru = unit.leaves()[0].local_to_world.R;
   const Mat3f& rr = rigid.leaves()[0].local_to_world.R;
   CHECK(std::equal(ru.m, ru.m + 9, rr.m));
-  CHECK_THROWS_WITH(unit.set_transform_of(*program, 0, T, Vec3f{1, 0, 1}), Catch::Contains("pose leaf scale"));
+  CHECK_THROWS_WITH(unit.set_transform_of(*program, 0, T, Vec3f{1, 0, 1}),
+                    Catch::Contains("pose leaf scale"));
   CHECK_THROWS_AS(unit.set_leaf_transform(*program, 0, T, Vec3f{1, -2, 1}), InputError);
   CHECK_THROWS_AS(unit.set_leaf_transform(*program, 0, T, Vec3f{std::nanf(""), 1, 1}), InputError);
 }
@@ -642,8 +644,9 @@ TEST_CASE("scaled grid leaves: the host/device layout evaluator equals the spars
     REQUIRE(program.sparse());
     Pose pose(program);
     for (std::size_t k = 0; k < program.leaves().size(); ++k)
-      pose.set_leaf_transform(program, k, random_rigid(rng, 1.0),
-                              Vec3f{float(rng.uniform(0.5, 2)), float(rng.uniform(0.5, 2)), float(rng.uniform(0.5, 2))});
+      pose.set_leaf_transform(
+          program, k, random_rigid(rng, 1.0),
+          Vec3f{float(rng.uniform(0.5, 2)), float(rng.uniform(0.5, 2)), float(rng.uniform(0.5, 2))});
     const TapeSparseLayout layout = sparse_layout(program, pose);
     const SparseEvaluator sparse(program, pose);
     int nonzero = 0;

@@ -43,7 +43,8 @@ TEST_CASE("muscles: the biceps swells as the elbow bends and flattens back at re
   SkinSetup plain;
   plain.tracker.tolerance = setup.tracker.tolerance;
   Skinner with(rig, setup), without(rig, plain);
-  CHECK(with.field(TreeKind::k2014).joint_operators().back() == "muscle biceps on Bone0: blend, driven by Bone1");
+  CHECK(with.field(TreeKind::k2014).joint_operators().back() ==
+        "muscle biceps on Bone0: blend, driven by Bone1");
   for (const Method m : {Method::kTracking2014, Method::kImplicit2013}) {
     INFO(to_string(m));
     const BakeResult a = with.bake(m, poses, quick);
@@ -91,10 +92,12 @@ TEST_CASE("muscles: setup keys, the curve and the errors", "[skinning][muscle][u
     }
     return std::string("no error");
   };
-  const std::string base = R"("bone": "Bone0", "driver": "Bone1", "center": [0, 0.5, 0], "radii": [0.2, 0.1, 0.1])";
+  const std::string base =
+      R"("bone": "Bone0", "driver": "Bone1", "center": [0, 0.5, 0], "radii": [0.2, 0.1, 0.1])";
   CHECK_THAT(error(R"({"driver": "Bone1", "center": [0, 0, 0], "radii": [1, 1, 1]})"),
              Catch::Contains("s.json.muscles[0].bone") && Catch::Contains("missing"));
-  CHECK_THAT(error("{" + base + R"(, "scale_axes": "yw"})"), Catch::Contains("scale_axes") && Catch::Contains("'w'"));
+  CHECK_THAT(error("{" + base + R"(, "scale_axes": "yw"})"),
+             Catch::Contains("scale_axes") && Catch::Contains("'w'"));
   CHECK_THAT(error("{" + base + R"(, "curve": [[90, 1], [45, 2]]})"), Catch::Contains("ascend"));
   CHECK_THAT(error("{" + base + R"(, "curve": [[0, 0]]})"), Catch::Contains("curve"));
   CHECK_THAT(error("{" + base + R"(, "operator": "contact"})"), Catch::Contains("operator"));
@@ -105,11 +108,13 @@ TEST_CASE("muscles: setup keys, the curve and the errors", "[skinning][muscle][u
   CHECK_THAT(error("{" + base + R"(, "size": 2})"), Catch::Contains("unknown key"));
   // Names are checked against the rig when the field is built.
   const Rig rig = make_cylinder();
-  for (const auto& [muscle, what] :
-       std::vector<std::pair<std::string, std::string>>{{R"("bone": "Arm")", ".bone"}, {R"("driver": "Bone0")", ".driver"}}) {
+  for (const auto& [muscle, what] : std::vector<std::pair<std::string, std::string>>{
+           {R"("bone": "Arm")", ".bone"}, {R"("driver": "Bone0")", ".driver"}}) {
     SkinSetup bad = setup_from_json(kBiceps, "biceps.json");
-    if (what == ".bone") bad.muscles[0].bone = "Arm";
-    else bad.muscles[0].driver = "Bone0";  // the root: no bend
+    if (what == ".bone")
+      bad.muscles[0].bone = "Arm";
+    else
+      bad.muscles[0].driver = "Bone0";  // the root: no bend
     Skinner sk(rig, bad);
     CHECK_THROWS_WITH(sk.field(TreeKind::k2014), Catch::Contains("muscles[0] ('biceps')" + what));
   }

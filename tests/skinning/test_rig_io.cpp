@@ -988,7 +988,8 @@ TEST_CASE("rig_io: the relaxation mask round-trips as the glTF attribute _RELAX_
     CHECK(m[o] == rig.relax_mask[static_cast<std::size_t>(rig.output.to_welded[o])]);
 }
 
-TEST_CASE("rig_io: the relaxation mask from a vertex-colour set, and bad masks", "[skinning][io][mask][unit]") {
+TEST_CASE("rig_io: the relaxation mask from a vertex-colour set, and bad masks",
+          "[skinning][io][mask][unit]") {
   const Rig rig = masked_bar();
   TempDir dir("mask_color");
   save_rig(rig, dir.file("bar.gltf"));
@@ -1010,11 +1011,15 @@ TEST_CASE("rig_io: the relaxation mask from a vertex-colour set, and bad masks",
         }
       json view = {{"buffer", doc["buffers"].size()}, {"byteOffset", offset}, {"byteLength", 16 * n}};
       doc["bufferViews"].push_back(view);
-      json acc = {{"bufferView", doc["bufferViews"].size() - 1}, {"componentType", 5126}, {"count", n}, {"type", "VEC4"}};
+      json acc = {{"bufferView", doc["bufferViews"].size() - 1},
+                  {"componentType", 5126},
+                  {"count", n},
+                  {"type", "VEC4"}};
       doc["accessors"].push_back(acc);
       prim["attributes"]["COLOR_0"] = doc["accessors"].size() - 1;
     }
-  doc["buffers"].push_back({{"byteLength", bin.size()}, {"uri", "data:application/octet-stream;base64," + base64(bin)}});
+  doc["buffers"].push_back(
+      {{"byteLength", bin.size()}, {"uri", "data:application/octet-stream;base64," + base64(bin)}});
   std::ofstream(dir.file("painted.gltf")) << doc.dump();
   LoadOptions o;
   o.mask.color_set = 0;
@@ -1049,14 +1054,16 @@ TEST_CASE("rig_io: the relaxation mask from a vertex-colour set, and bad masks",
   // A rig's own mask must fit it.
   Rig bad = masked_bar();
   bad.relax_mask.pop_back();
-  CHECK_THAT(error_of([&] { validate(bad); }), Catch::Contains("relaxation mask") && Catch::Contains("values for"));
+  CHECK_THAT(error_of([&] { validate(bad); }),
+             Catch::Contains("relaxation mask") && Catch::Contains("values for"));
   bad = masked_bar();
   bad.relax_mask[3] = -0.5f;
   CHECK_THAT(error_of([&] { validate(bad); }), Catch::Contains("relaxation mask of vertex 3"));
 }
 
-TEST_CASE("rig_io: the relaxation mask from a COLLADA colour set, read in the importer's child and in process",
-          "[skinning][io][mask][unit]") {
+TEST_CASE(
+    "rig_io: the relaxation mask from a COLLADA colour set, read in the importer's child and in process",
+    "[skinning][io][mask][unit]") {
   // The strip with a colour per vertex: red 0.3, green = y / 2 (0 at the root end, 1 at the tip).
   std::string dae = kStripDae;
   const std::string colours = R"(<source id="strip-col">

@@ -196,8 +196,7 @@ TEST_CASE("relaxation mask: a value between 0 and 1 pulls toward the rigid posit
   }
 }
 
-TEST_CASE("rigid pieces: a piece the skin runs into does not give way",
-          "[skinning][rigid][unit]") {
+TEST_CASE("rigid pieces: a piece the skin runs into does not give way", "[skinning][rigid][unit]") {
   // A block on Bone0 beside the elbow, off the skin at rest: bending Bone1 by 90° about x swings
   // the forearm (+y) toward +z, through where the block is. The block's vertices weigh on Bone0
   // alone: a rigid piece, whose field is part of Bone0's.
@@ -207,8 +206,10 @@ TEST_CASE("rigid pieces: a piece the skin runs into does not give way",
   const auto base = static_cast<int>(rig.rest.rows());
   rig.rest.conservativeResize(base + 8, 3);
   for (int c = 0; c < 8; ++c)
-    rig.rest.row(base + c) << ((c & 1) ? hi.x() : lo.x()), ((c & 2) ? hi.y() : lo.y()), ((c & 4) ? hi.z() : lo.z());
-  const int quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+    rig.rest.row(base + c) << ((c & 1) ? hi.x() : lo.x()), ((c & 2) ? hi.y() : lo.y()),
+        ((c & 4) ? hi.z() : lo.z());
+  const int quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                           {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
   const auto t0 = rig.triangles.rows();
   rig.triangles.conservativeResize(t0 + 12, 3);
   for (int q = 0; q < 6; ++q) {
@@ -230,7 +231,9 @@ TEST_CASE("rigid pieces: a piece the skin runs into does not give way",
     int n = 0;
     for (Eigen::Index v = 0; v < skin_vertices; ++v) {
       const Eigen::Vector3f q = p.row(v).transpose();
-      if (rig.rest(v, 1) > 1.0f && (q.array() > (lo + pad).array()).all() && (q.array() < (hi - pad).array()).all()) ++n;
+      if (rig.rest(v, 1) > 1.0f && (q.array() > (lo + pad).array()).all() &&
+          (q.array() < (hi - pad).array()).all())
+        ++n;
     }
     return n;
   };
@@ -254,7 +257,8 @@ TEST_CASE("small parts: their relaxation mask pulls them toward DQS, 0 skins the
   const BakeResult dqs = Skinner(sc.rig).bake(Method::kDqs, sc.poses, sc.quick);
   auto from_dqs = [&](const BakeResult& r) {
     double d = 0;
-    for (std::size_t f = 0; f < sc.poses.size(); ++f) d = std::max(d, double((r.frames[f] - dqs.frames[f]).cwiseAbs().maxCoeff()));
+    for (std::size_t f = 0; f < sc.poses.size(); ++f)
+      d = std::max(d, double((r.frames[f] - dqs.frames[f]).cwiseAbs().maxCoeff()));
     return d / sc.diag;
   };
   for (const Method m : {Method::kTracking2014, Method::kImplicit2013}) {

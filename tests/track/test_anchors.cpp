@@ -38,7 +38,8 @@ TrackerOptions options_for(Relaxation r) {
 /// perturbation of `noise` (a few percent of an edge) in every direction.
 struct Scene {
   test::Mesh mesh = test::capsule_mesh(0.5f, 0.f, 20, 0, 10);
-  std::shared_ptr<implicit::SphereField> rest_field = std::make_shared<implicit::SphereField>(Vec3f{0, 0, 0}, 0.5f);
+  std::shared_ptr<implicit::SphereField> rest_field =
+      std::make_shared<implicit::SphereField>(Vec3f{0, 0, 0}, 0.5f);
   std::shared_ptr<implicit::SphereField> field;
   std::vector<float> iso = sample_iso_values(test::as_function(rest_field), mesh.V);
   Positions start;
@@ -89,7 +90,8 @@ TEST_CASE("anchors: pinned vertices stay exactly at their anchors while their ne
   // rigid placement by its bone, slightly off the moved iso-surface.
   std::vector<float> k(nv, 0.f);
   std::vector<int> pinned, free;
-  for (std::size_t v = 0; v < nv; ++v) (sc.mesh.V(Eigen::Index(v), 1) > 0.3f ? pinned : free).push_back(int(v));
+  for (std::size_t v = 0; v < nv; ++v)
+    (sc.mesh.V(Eigen::Index(v), 1) > 0.3f ? pinned : free).push_back(int(v));
   for (int v : pinned) k[std::size_t(v)] = 1.f;
   const Mat3f R = test::rot_z(0.05f);
   Positions anchors = sc.mesh.V;
@@ -141,7 +143,8 @@ TEST_CASE("anchors: a stiffer anchor pulls its vertex closer, the vertex stays o
       // Mean tangential distance to the anchors (radial parts are the projection's).
       double sum = 0;
       for (int v : all) {
-        const Eigen::Vector3f a = sc.start.row(v).transpose().normalized(), b = P.row(v).transpose().normalized();
+        const Eigen::Vector3f a = sc.start.row(v).transpose().normalized(),
+                              b = P.row(v).transpose().normalized();
         sum += double(std::acos(std::clamp(a.dot(b), -1.f, 1.f)));
       }
       const float mean = float(sum / double(nv));
@@ -151,7 +154,8 @@ TEST_CASE("anchors: a stiffer anchor pulls its vertex closer, the vertex stays o
   }
 }
 
-TEST_CASE("anchors: bad stiffness or anchors are refused naming the item", "[track][tracker][anchors][errors][unit]") {
+TEST_CASE("anchors: bad stiffness or anchors are refused naming the item",
+          "[track][tracker][anchors][errors][unit]") {
   const Scene sc({0.f, 0.f, 0.f}, 0.f, 1);
   const auto nv = static_cast<std::size_t>(sc.mesh.V.rows());
   IsoSurfaceTracker tracker(sc.mesh.V, sc.mesh.F, sc.iso);

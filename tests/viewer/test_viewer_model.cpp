@@ -129,9 +129,9 @@ TEST_CASE("viewer: the edited pose saved as a pose script loads back as that pos
   ViewerModel m(sk, Method::kDqs, quick());
   m.set_joint_angles(0, {5, -10, 15});
   m.set_joint_angles(1, {40, 20, -30});
-  const std::string path =
-      (std::filesystem::temp_directory_path() / ("isokit_viewer_" + std::to_string(std::random_device{}()) + ".json"))
-          .string();
+  const std::string path = (std::filesystem::temp_directory_path() /
+                            ("isokit_viewer_" + std::to_string(std::random_device{}()) + ".json"))
+                               .string();
   m.save_pose_script(path);
   const std::vector<Pose> back = pose_script_animation(sk->rig(), path);
   std::filesystem::remove(path);
@@ -156,9 +156,11 @@ TEST_CASE("viewer: overlays flag the frame's intersecting and inverted triangles
   int flagged = 0;
   for (std::uint8_t f : dqs.intersecting) flagged += f;
   CHECK(flagged > 0);
-  for (const auto& p : details.pairs) CHECK((dqs.intersecting[std::size_t(p[0])] && dqs.intersecting[std::size_t(p[1])]));
+  for (const auto& p : details.pairs)
+    CHECK((dqs.intersecting[std::size_t(p[0])] && dqs.intersecting[std::size_t(p[1])]));
   for (float d : dqs.dqs_distance) CHECK(d == 0.f);
-  CHECK(std::count(dqs.mask.begin(), dqs.mask.end(), 1.0f) == static_cast<long>(dqs.mask.size()));  // DQS: none
+  CHECK(std::count(dqs.mask.begin(), dqs.mask.end(), 1.0f) ==
+        static_cast<long>(dqs.mask.size()));  // DQS: none
   int inverted = 0;
   for (std::uint8_t f : dqs.inverted) inverted += f;
   CHECK(inverted > 0);  // the fold's triangles face into the field
@@ -191,7 +193,7 @@ TEST_CASE("viewer: baking in the background shows the last finished frame, then 
   bg.background = true;
   ViewerModel a(sk, Method::kTracking2014, bg);
   ViewerModel b(cylinder(), Method::kTracking2014, quick());  // its own skinner: a's worker uses sk
-  CHECK(a.positions() == b.positions());  // the first frame is waited for
+  CHECK(a.positions() == b.positions());                      // the first frame is waited for
   CHECK_FALSE(a.pending());
   for (const double angle : {40.0, 80.0}) {
     a.set_joint_angles(1, {angle, 0, 0});
@@ -228,7 +230,8 @@ TEST_CASE("viewer: a clip exported from the viewer is the glb bake writes", "[vi
   CHECK_THROWS_WITH(m.export_clip("x.glb"), Catch::Contains("no clip"));
   m.play_clip("bend");
   m.set_frame(3);
-  const auto dir = std::filesystem::temp_directory_path() / ("isokit_viewer_export_" + std::to_string(std::random_device{}()));
+  const auto dir = std::filesystem::temp_directory_path() /
+                   ("isokit_viewer_export_" + std::to_string(std::random_device{}()));
   std::filesystem::create_directories(dir);
   m.export_clip((dir / "viewer.glb").string());
   CHECK(m.frame() == 3);  // the shown frame stays

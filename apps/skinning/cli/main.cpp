@@ -219,8 +219,9 @@ void print_operators(const FittedRig& fitted, const SkinSetup& setup) {
     const double peak = std::max_element(m.curve.begin(), m.curve.end(), [](const auto& a, const auto& b) {
                           return a.second < b.second;
                         })->second;
-    std::printf("  muscle %-17s on %s, %s, scaled up to %s by the bend of %s\n", m.name.c_str(), m.bone.c_str(),
-                m.op == JointOperator::kUnion ? "union" : "blend", format_number(peak).c_str(), m.driver.c_str());
+    std::printf("  muscle %-17s on %s, %s, scaled up to %s by the bend of %s\n", m.name.c_str(),
+                m.bone.c_str(), m.op == JointOperator::kUnion ? "union" : "blend",
+                format_number(peak).c_str(), m.driver.c_str());
   }
 }
 
@@ -252,7 +253,8 @@ CLI::App* add_info(CLI::App& app, Args& a) {
   info->add_flag("--fit", a.info_fit,
                  "also fit the primitives and report each joint's (vertices, r, closure points, and how "
                  "many rest vertices of other joints lie inside it)");
-  info->add_option("--setup", a.info_setup, "JSON setup file (its `mask` section; the fit options for --fit)");
+  info->add_option("--setup", a.info_setup,
+                   "JSON setup file (its `mask` section; the fit options for --fit)");
   return info;
 }
 
@@ -299,9 +301,11 @@ CLI::App* add_view(CLI::App& app, isokit::viewer::ViewerGuiOptions& v) {
   view->add_option("--setup", v.setup, "JSON setup file");
   view->add_option("--method", v.method, "lbs | dqs | implicit2013 | tracking2014")->capture_default_str();
   view->add_option("--size", v.width, "window width in pixels")->capture_default_str();
-  view->add_option("--script", v.script_path, "headless: replay this JSON script of input events, then close");
+  view->add_option("--script", v.script_path,
+                   "headless: replay this JSON script of input events, then close");
   view->add_option("--screenshot-dir", v.screenshot_dir, "where the script's screenshots and report go");
-  view->add_option("--report", v.report_path, "the script's report (default SCREENSHOT_DIR/viewer-report.json)");
+  view->add_option("--report", v.report_path,
+                   "the script's report (default SCREENSHOT_DIR/viewer-report.json)");
   return view;
 }
 #endif

@@ -38,7 +38,8 @@ namespace {
 Eigen::Matrix3d rotation_of(const std::array<double, 3>& degrees) {
   Eigen::Matrix3d r = Eigen::Matrix3d::Identity();
   for (int a = 0; a < 3; ++a)
-    r = r * Eigen::AngleAxisd(degrees[std::size_t(a)] * kPi / 180.0, Eigen::Vector3d::Unit(a)).toRotationMatrix();
+    r = r *
+        Eigen::AngleAxisd(degrees[std::size_t(a)] * kPi / 180.0, Eigen::Vector3d::Unit(a)).toRotationMatrix();
   return r;
 }
 
@@ -88,7 +89,8 @@ const Rig& ViewerModel::rig() const {
 
 void ViewerModel::select_joint(int j) {
   require(j >= -1 && j < static_cast<int>(rig().joints.size()), "viewer: joint " + std::to_string(j),
-          "does not exist", "select one of the rig's " + std::to_string(rig().joints.size()) + " joints, or -1");
+          "does not exist",
+          "select one of the rig's " + std::to_string(rig().joints.size()) + " joints, or -1");
   selected_ = j;
 }
 
@@ -113,8 +115,8 @@ int ViewerModel::pick_joint(const Eigen::Vector3d& origin, const Eigen::Vector3d
 }
 
 std::array<double, 3> ViewerModel::joint_angles(int j) const {
-  require(j >= 0 && j < static_cast<int>(angles_.size()), "viewer: joint " + std::to_string(j), "does not exist",
-          "use an index into the rig's joints");
+  require(j >= 0 && j < static_cast<int>(angles_.size()), "viewer: joint " + std::to_string(j),
+          "does not exist", "use an index into the rig's joints");
   return angles_[std::size_t(j)];
 }
 
@@ -141,7 +143,8 @@ void ViewerModel::push_undo() {
 void ViewerModel::set_joint_angles(int j, const std::array<double, 3>& degrees) {
   joint_angles(j);  // checks j
   for (double a : degrees)
-    require(std::isfinite(a), "viewer: joint " + std::to_string(j) + " angle", "is not finite", "give degrees");
+    require(std::isfinite(a), "viewer: joint " + std::to_string(j) + " angle", "is not finite",
+            "give degrees");
   clip_.clear();
   if (degrees == angles_[std::size_t(j)]) return;
   if (!dragging_ || !drag_changed_) push_undo();
@@ -197,7 +200,8 @@ void ViewerModel::save_pose_script(const std::string& path) const {
     const std::array<double, 3>& a = angles_[j];
     if (a == std::array<double, 3>{0.0, 0.0, 0.0}) continue;
     json turns = json::array();
-    for (int c = 0; c < 3; ++c) turns.push_back(json::array({std::string(1, char('x' + c)), a[std::size_t(c)]}));
+    for (int c = 0; c < 3; ++c)
+      turns.push_back(json::array({std::string(1, char('x' + c)), a[std::size_t(c)]}));
     joints[rig().joints[j].name] = turns;
   }
   json key = json::object();
@@ -244,7 +248,8 @@ void ViewerModel::export_clip(const std::string& glb_path) {
   refresh();  // bakes (or asks the worker for) every frame up to the last
   wait_idle();
   std::vector<track::Positions> frames;
-  for (const Frame& f : tracks_.at(method_)->clip_frames) frames.push_back(f.positions);  // the worker is idle
+  for (const Frame& f : tracks_.at(method_)->clip_frames)
+    frames.push_back(f.positions);  // the worker is idle
   const auto clip = std::find_if(rig().clips.begin(), rig().clips.end(),
                                  [&](const skinning::Clip& c) { return c.name == clip_; });
   skinning::write_baked_glb(rig(), frames, clip->fps, glb_path);
@@ -362,7 +367,8 @@ void ViewerModel::worker_loop() {
         error_ = error;
       else
         finished_ = Finished{r.id, r.methods, frames};
-      measure = !error && !wake_.wait_for(lock, kMeasureDelay, [this] { return stop_ || waiting_.has_value(); });
+      measure =
+          !error && !wake_.wait_for(lock, kMeasureDelay, [this] { return stop_ || waiting_.has_value(); });
       if (!measure) busy_ = false;
     }
     if (measure) {
@@ -484,7 +490,8 @@ const Overlays& ViewerModel::overlays() {
     skinning::SelfIntersectionOptions so;
     so.max_pairs = static_cast<int>(std::min<std::size_t>(nt * 4, 1u << 20));
     skinning::count_self_intersections(f.positions, r.triangles, &details, so);
-    for (const auto& p : details.pairs) o.intersecting[std::size_t(p[0])] = o.intersecting[std::size_t(p[1])] = 1;
+    for (const auto& p : details.pairs)
+      o.intersecting[std::size_t(p[0])] = o.intersecting[std::size_t(p[1])] = 1;
   }
   overlays_ = std::move(o);
   return *overlays_;

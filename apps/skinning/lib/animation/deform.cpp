@@ -112,7 +112,8 @@ void dual_quaternion_blend(const SkinWeights& w, const std::vector<Affine>& skin
   bool stretched = false;
   for (std::size_t j = 0; j < skin.size(); ++j) {
     stretch[j] = stretch_part(skin[j]);
-    stretched = stretched || (stretch[j] - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() > kStretchTolerance;
+    stretched =
+        stretched || (stretch[j] - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() > kStretchTolerance;
   }
   parallel_for(static_cast<std::size_t>(rest.rows()), grain, [&](std::size_t b, std::size_t e) {
     for (std::size_t v = b; v < e; ++v) {
@@ -139,7 +140,8 @@ void dual_quaternion_blend(const SkinWeights& w, const std::vector<Affine>& skin
       Eigen::Matrix3d linear = rot;
       if (stretched) {
         Eigen::Matrix3d blend = Eigen::Matrix3d::Zero();
-        for (int k = w.offsets[v]; k < w.offsets[v + 1]; ++k) blend += double(w.weights[k]) * stretch[w.joints[k]];
+        for (int k = w.offsets[v]; k < w.offsets[v + 1]; ++k)
+          blend += double(w.weights[k]) * stretch[w.joints[k]];
         p = blend * p;
         linear = rot * blend;
       }

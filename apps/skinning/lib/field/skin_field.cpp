@@ -72,7 +72,8 @@ double bend_between(const Affine& parent, const Affine& child) {
 /// a rigid `m` (within kStretchTolerance).
 Vec3f leaf_scale(const Affine& m, const Affine& leaf) {
   const Eigen::Matrix3d p = stretch_part(m);
-  if ((p - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() <= kStretchTolerance) return Vec3f{1.f, 1.f, 1.f};
+  if ((p - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() <= kStretchTolerance)
+    return Vec3f{1.f, 1.f, 1.f};
   const Eigen::Matrix3d local = leaf.linear().transpose() * p * leaf.linear();
   return Vec3f{float(local(0, 0)), float(local(1, 1)), float(local(2, 2))};
 }
@@ -164,8 +165,12 @@ void SkinField::add_muscles(const SkinSetup& setup, const std::vector<int>& inde
     }
     u.normalize();
     const Eigen::Vector3d v = u.unitOrthogonal(), x = u.cross(v);
-    MuscleLeaf leaf{static_cast<int>(sk.parts.parent.size()), bone, driver,
-                    r.joints[std::size_t(driver)].parent, Affine::Identity(), m};
+    MuscleLeaf leaf{static_cast<int>(sk.parts.parent.size()),
+                    bone,
+                    driver,
+                    r.joints[std::size_t(driver)].parent,
+                    Affine::Identity(),
+                    m};
     leaf.rest.linear() << u, v, x;
     leaf.rest.translation() = m.center;
     sk.parts.parent.push_back(index[std::size_t(bone)]);
@@ -182,9 +187,11 @@ void SkinField::add_muscles(const SkinSetup& setup, const std::vector<int>& inde
 /// Each muscle moved rigidly with its bone and scaled by its driver's bend (MuscleSetup::curve).
 void SkinField::pose_muscles(const std::vector<Affine>& skin, implicit::Pose& pose) const {
   for (const MuscleLeaf& m : muscles_) {
-    const double f = m.setup.scale_at(bend_between(skin[std::size_t(m.driver_parent)], skin[std::size_t(m.driver)]));
+    const double f =
+        m.setup.scale_at(bend_between(skin[std::size_t(m.driver_parent)], skin[std::size_t(m.driver)]));
     Vec3f s;
-    for (int c = 0; c < 3; ++c) s[c] = static_cast<float>(m.setup.radii[c] * (m.setup.scaled[std::size_t(c)] ? f : 1.0));
+    for (int c = 0; c < 3; ++c)
+      s[c] = static_cast<float>(m.setup.radii[c] * (m.setup.scaled[std::size_t(c)] ? f : 1.0));
     pose.set_transform_of(*program_, m.id, to_rigid3f(skin[std::size_t(m.bone)] * m.rest), s);
   }
 }

@@ -198,8 +198,9 @@ void SceneBuilder::add_colors(aiMesh* mesh, const tinygltf::Primitive& prim, con
     mesh->mColors[k] = new aiColor4D[std::max(nv, 1u)];
     for (unsigned i = 0; i < nv; ++i) {
       const double* c = v.data() + std::size_t(i) * std::size_t(comps);
-      mesh->mColors[k][i] = comps == 1 ? aiColor4D(float(c[0]), float(c[0]), float(c[0]), 1.f)
-                                       : aiColor4D(float(c[0]), float(c[1]), float(c[2]), comps == 4 ? float(c[3]) : 1.f);
+      mesh->mColors[k][i] =
+          comps == 1 ? aiColor4D(float(c[0]), float(c[0]), float(c[0]), 1.f)
+                     : aiColor4D(float(c[0]), float(c[1]), float(c[2]), comps == 4 ? float(c[3]) : 1.f);
     }
   };
   // Colours are optional data: one of an unexpected shape is skipped, not the file refused.
@@ -207,7 +208,8 @@ void SceneBuilder::add_colors(aiMesh* mesh, const tinygltf::Primitive& prim, con
     const bool ok = ok_comps && values == std::size_t(nv) * std::size_t(comps);
     if (!ok && warnings_ != nullptr)
       warnings_->push_back(w + ": " + std::to_string(comps) + " component(s) per vertex and " +
-                           std::to_string(values) + " values for " + std::to_string(nv) + " vertices; not read");
+                           std::to_string(values) + " values for " + std::to_string(nv) +
+                           " vertices; not read");
     return ok;
   };
   for (unsigned k = 0; k < kMaskColorSet; ++k) {

@@ -788,21 +788,25 @@ void Loader::append_mask(const MeshUse& m, const std::vector<int>& local_to_out,
   const aiMesh* mesh = m.mesh;
   const bool chosen = options_.mask.color_set >= 0;
   const unsigned set = chosen ? static_cast<unsigned>(options_.mask.color_set) : gltf::kMaskColorSet;
-  const bool has = set < AI_MAX_NUMBER_OF_COLOR_SETS && mesh->HasVertexColors(set) &&
-                   (chosen || own_scene_ != nullptr);
+  const bool has =
+      set < AI_MAX_NUMBER_OF_COLOR_SETS && mesh->HasVertexColors(set) && (chosen || own_scene_ != nullptr);
   file.mask.resize(file.pos.size(), 1.f);
   if (!has) return;
   if (file.mask_source.empty())
-    file.mask_source = chosen ? "vertex colour set " + std::to_string(set) + " channel " + "rgba"[options_.mask.channel]
-                              : "attribute " + options_.mask.attribute;
+    file.mask_source =
+        chosen ? "vertex colour set " + std::to_string(set) + " channel " + "rgba"[options_.mask.channel]
+               : "attribute " + options_.mask.attribute;
   for (unsigned v = 0; v < mesh->mNumVertices; ++v) {
     const int o = local_to_out[v];
     if (o < 0) continue;
     const aiColor4D& c = mesh->mColors[set][v];
-    const float x = options_.mask.channel == 0 ? c.r : options_.mask.channel == 1 ? c.g
-                  : options_.mask.channel == 2 ? c.b : c.a;
+    const float x = options_.mask.channel == 0   ? c.r
+                    : options_.mask.channel == 1 ? c.g
+                    : options_.mask.channel == 2 ? c.b
+                                                 : c.a;
     require(std::isfinite(x), path_ + ": mesh " + quote(m.name) + " vertex " + std::to_string(v),
-            "relaxation mask (" + file.mask_source + ") is not finite", "paint values in [0, 1] and export again");
+            "relaxation mask (" + file.mask_source + ") is not finite",
+            "paint values in [0, 1] and export again");
     file.mask[static_cast<std::size_t>(o)] = std::clamp(x, 0.f, 1.f);
   }
 }
@@ -1104,10 +1108,12 @@ Rig Loader::load() {
           path_ + ": LoadOptions::weld_tolerance",
           "must be >= 0 (got " + format_number(options_.weld_tolerance) + ")", "pass 0 for exact welding");
   require(options_.mask.color_set >= -1 && options_.mask.color_set < int(AI_MAX_NUMBER_OF_COLOR_SETS),
-          path_ + ": LoadOptions::mask.color_set", "must be -1 .. 7 (got " + std::to_string(options_.mask.color_set) + ")",
+          path_ + ": LoadOptions::mask.color_set",
+          "must be -1 .. 7 (got " + std::to_string(options_.mask.color_set) + ")",
           "pass the vertex-colour set of the mask, or -1 for none");
   require(options_.mask.channel >= 0 && options_.mask.channel <= 3, path_ + ": LoadOptions::mask.channel",
-          "must be 0 .. 3 (got " + std::to_string(options_.mask.channel) + ")", "0 = red, 1 = green, 2 = blue, 3 = alpha");
+          "must be 0 .. 3 (got " + std::to_string(options_.mask.channel) + ")",
+          "0 = red, 1 = green, 2 = blue, 3 = alpha");
   std::error_code ec;
   require(fs::exists(path_, ec), path_, "file does not exist", "check the path");
   require(fs::is_regular_file(path_, ec), path_, "is not a regular file", "give the path of a rig file");
@@ -1116,8 +1122,8 @@ Rig Loader::load() {
   if (ext == ".gltf" || ext == ".glb") {
     const tinygltf::Model model = gltf::read_model(path_, &report_.warnings, &budget_);
     gltf_ = check_gltf(model, path_, report_, budget_);
-    own_scene_ =
-        gltf::to_ai_scene(model, gltf_.node_names, path_, &budget_, options_.mask.attribute, &report_.warnings);
+    own_scene_ = gltf::to_ai_scene(model, gltf_.node_names, path_, &budget_, options_.mask.attribute,
+                                   &report_.warnings);
     scene_ = own_scene_.get();
   } else {
     const auto bytes = fs::file_size(path_, ec);

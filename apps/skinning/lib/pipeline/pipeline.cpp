@@ -239,7 +239,9 @@ void rigid_positions(const Skinner& sk, const BakeState& s, const std::vector<Af
       continue;
     }
     const Eigen::Vector3d p = rest.row(v).cast<double>().transpose();
-    out.row(v) = (skin[static_cast<std::size_t>(partition[static_cast<std::size_t>(v)])] * p).cast<float>().transpose();
+    out.row(v) = (skin[static_cast<std::size_t>(partition[static_cast<std::size_t>(v)])] * p)
+                     .cast<float>()
+                     .transpose();
   }
 }
 

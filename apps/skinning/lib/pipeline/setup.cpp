@@ -347,7 +347,8 @@ void read_tracker_rigid(const json& t, const std::string& w, SkinSetup& s) {
   read(t, "rigid_pieces", s.rigid_pieces, w);
   read(t, "small_part_mask", s.small_part_mask, w);
   require(s.small_part_mask >= 0.f && s.small_part_mask <= 1.f, w + ".small_part_mask",
-          "must be in [0, 1] (got " + format_number(s.small_part_mask) + ")", "1 = off, 0 = DQS on small parts");
+          "must be in [0, 1] (got " + format_number(s.small_part_mask) + ")",
+          "1 = off, 0 = DQS on small parts");
   read(t, "small_part_vertices", s.small_part_vertices, w);
   require(s.small_part_vertices >= 0, w + ".small_part_vertices", "must be >= 0", "use e.g. 100");
 }
@@ -468,7 +469,8 @@ Eigen::Vector3d read_vec3(const json& m, const char* key, const std::string& w) 
   std::vector<double> v;
   read(m, key, v, w);
   require(v.size() == 3, w + "." + key, "must be 3 numbers (got " + m.at(key).dump() + ")", "give [x, y, z]");
-  for (double x : v) require(std::isfinite(x), w + "." + key, "has a value that is not finite", "give finite numbers");
+  for (double x : v)
+    require(std::isfinite(x), w + "." + key, "has a value that is not finite", "give finite numbers");
   return {v[0], v[1], v[2]};
 }
 
@@ -485,7 +487,8 @@ MuscleSetup read_muscle(const json& m, const std::string& w) {
   u.center = read_vec3(m, "center", w);
   if (m.contains("axis")) u.axis = read_vec3(m, "axis", w);
   u.radii = read_vec3(m, "radii", w);
-  require(u.radii.minCoeff() > 0, w + ".radii", "must be > 0", "give the semi-axes at rest in the rig's units");
+  require(u.radii.minCoeff() > 0, w + ".radii", "must be > 0",
+          "give the semi-axes at rest in the rig's units");
   if (m.contains("scale_axes")) {
     std::string axes;
     read(m, "scale_axes", axes, w);
@@ -504,9 +507,10 @@ MuscleSetup read_muscle(const json& m, const std::string& w) {
     for (const std::vector<double>& k : knots) {
       require(k.size() == 2 && std::isfinite(k[0]) && std::isfinite(k[1]), w + ".curve",
               "each knot must be [degrees, factor]", "e.g. [[0, 1], [90, 1.4]]");
-      require(k[0] >= 0 && k[0] <= 180 && k[1] > 0, w + ".curve",
-              "knot [" + format_number(k[0]) + ", " + format_number(k[1]) + "] is outside [0, 180] x (0, inf)",
-              "give bends in degrees and positive factors");
+      require(
+          k[0] >= 0 && k[0] <= 180 && k[1] > 0, w + ".curve",
+          "knot [" + format_number(k[0]) + ", " + format_number(k[1]) + "] is outside [0, 180] x (0, inf)",
+          "give bends in degrees and positive factors");
       require(u.curve.empty() || k[0] > u.curve.back().first, w + ".curve", "knots must ascend in degrees",
               "sort the knots by bend");
       u.curve.emplace_back(k[0], k[1]);
@@ -523,7 +527,8 @@ MuscleSetup read_muscle(const json& m, const std::string& w) {
 /// Section `muscles`: a list of MuscleSetup.
 void read_muscles(const json& list, const std::string& w, std::vector<MuscleSetup>& muscles) {
   require(list.is_array(), w, "must be a list of muscles", "see docs/skinning.md, \"Muscles\"");
-  for (std::size_t i = 0; i < list.size(); ++i) muscles.push_back(read_muscle(list[i], w + "[" + std::to_string(i) + "]"));
+  for (std::size_t i = 0; i < list.size(); ++i)
+    muscles.push_back(read_muscle(list[i], w + "[" + std::to_string(i) + "]"));
 }
 
 /// Section `substeps`: animation sub-stepping (SubstepOptions, 2014 §5.2).

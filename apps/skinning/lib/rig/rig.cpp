@@ -102,9 +102,10 @@ void validate(const Rig& rig) {
     }
   }
   if (!rig.relax_mask.empty()) {
-    require(static_cast<int>(rig.relax_mask.size()) == nv, n + ": relaxation mask",
-            "has " + std::to_string(rig.relax_mask.size()) + " values for " + std::to_string(nv) + " vertices",
-            "give one value per vertex, or none");
+    require(
+        static_cast<int>(rig.relax_mask.size()) == nv, n + ": relaxation mask",
+        "has " + std::to_string(rig.relax_mask.size()) + " values for " + std::to_string(nv) + " vertices",
+        "give one value per vertex, or none");
     for (std::size_t v = 0; v < rig.relax_mask.size(); ++v)
       require(rig.relax_mask[v] >= 0.f && rig.relax_mask[v] <= 1.f,
               n + ": relaxation mask of vertex " + std::to_string(v),

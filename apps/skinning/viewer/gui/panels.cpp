@@ -14,12 +14,18 @@ namespace isokit::viewer::gui {
 
 const char* to_string(Overlay o) {
   switch (o) {
-    case Overlay::kNone: return "none";
-    case Overlay::kIntersecting: return "self-intersections";
-    case Overlay::kInverted: return "inverted triangles";
-    case Overlay::kContacts: return "contacts";
-    case Overlay::kMask: return "relaxation mask";
-    case Overlay::kDqsDistance: return "distance to DQS";
+    case Overlay::kNone:
+      return "none";
+    case Overlay::kIntersecting:
+      return "self-intersections";
+    case Overlay::kInverted:
+      return "inverted triangles";
+    case Overlay::kContacts:
+      return "contacts";
+    case Overlay::kMask:
+      return "relaxation mask";
+    case Overlay::kDqsDistance:
+      return "distance to DQS";
   }
   return "?";
 }
@@ -29,7 +35,8 @@ skinning::RenderOptions ViewState::options(const Eigen::AlignedBox3d& box, int w
   o.width = std::max(width, 16);
   o.height = std::max(height, 16);
   o.supersample = 1;
-  o.view_direction = Eigen::Vector3d(-std::sin(yaw) * std::cos(pitch), -std::sin(pitch), -std::cos(yaw) * std::cos(pitch));
+  o.view_direction =
+      Eigen::Vector3d(-std::sin(yaw) * std::cos(pitch), -std::sin(pitch), -std::cos(yaw) * std::cos(pitch));
   o.up = Eigen::Vector3d::UnitY();
   const Eigen::Vector3d forward = o.view_direction.normalized();
   const Eigen::Vector3d right = forward.cross(o.up).normalized(), up = right.cross(forward);
@@ -107,14 +114,16 @@ void Panels::draw_method_panel() {
   std::vector<const char*> names;
   for (Method x : methods) names.push_back(skinning::to_string(x));
   if (ImGui::Combo("method", &m, names.data(), int(names.size()))) model_.set_method(methods[std::size_t(m)]);
-  int c = model_.compare() ? 1 + int(std::find(methods.begin(), methods.end(), *model_.compare()) - methods.begin()) : 0;
+  int c = model_.compare()
+              ? 1 + int(std::find(methods.begin(), methods.end(), *model_.compare()) - methods.begin())
+              : 0;
   std::vector<const char*> cnames{"none"};
   cnames.insert(cnames.end(), names.begin(), names.end());
   if (ImGui::Combo("beside", &c, cnames.data(), int(cnames.size())))
     model_.set_compare(c == 0 ? std::nullopt : std::optional<Method>(methods[std::size_t(c - 1)]));
   int o = int(overlay_);
-  const char* overlays[] = {"none", "self-intersections", "inverted triangles", "contacts", "relaxation mask",
-                            "distance to DQS"};
+  const char* overlays[] = {"none",     "self-intersections", "inverted triangles",
+                            "contacts", "relaxation mask",    "distance to DQS"};
   if (ImGui::Combo("overlay", &o, overlays, 6)) set_overlay(Overlay(o));
   if (ImGui::Button("reset view")) view_ = ViewState{}, dirty_ = true;
   ImGui::TextDisabled("view: right-drag turns, middle-drag pans, wheel zooms");
@@ -201,7 +210,8 @@ void Panels::draw_clip_panel() {
 void Panels::draw_stats_panel() {
   const skinning::FrameStats& s = model_.stats();
   ImGui::Text("%s: %.1f ms per frame", skinning::to_string(model_.method()), s.ms);
-  ImGui::Text("tracker calls %d (at the cap %d), iterations %d", s.tracker_calls, s.capped_calls, s.iterations);
+  ImGui::Text("tracker calls %d (at the cap %d), iterations %d", s.tracker_calls, s.capped_calls,
+              s.iterations);
   const skinning::FrameMetrics& m = s.metrics;
   if (!model_.metrics_shown()) ImGui::TextDisabled("(metrics: measured when the pose rests)");
   ImGui::Text("self-intersections %d (new %d)", m.self_intersections, m.self_intersections_new);

@@ -17,7 +17,8 @@ void overlay_colours(Overlay overlay, const Overlays& o, std::size_t nv, std::si
   const Eigen::Vector3f base = options.base_color, hot(kOverlayRgb[0], kOverlayRgb[1], kOverlayRgb[2]);
   auto faces = [&](const std::vector<std::uint8_t>& flag) {
     options.face_colors.resize(Eigen::Index(nt), 3);
-    for (std::size_t f = 0; f < nt; ++f) options.face_colors.row(Eigen::Index(f)) = (flag[f] ? hot : base).transpose();
+    for (std::size_t f = 0; f < nt; ++f)
+      options.face_colors.row(Eigen::Index(f)) = (flag[f] ? hot : base).transpose();
   };
   auto vertices = [&](auto&& weight) {
     options.vertex_colors.resize(Eigen::Index(nv), 3);
@@ -27,11 +28,20 @@ void overlay_colours(Overlay overlay, const Overlays& o, std::size_t nv, std::si
     }
   };
   switch (overlay) {
-    case Overlay::kNone: break;
-    case Overlay::kIntersecting: faces(o.intersecting); break;
-    case Overlay::kInverted: faces(o.inverted); break;
-    case Overlay::kContacts: vertices([&](std::size_t v) { return o.contact[v] ? 1.f : 0.f; }); break;
-    case Overlay::kMask: vertices([&](std::size_t v) { return 1.f - o.mask[v]; }); break;
+    case Overlay::kNone:
+      break;
+    case Overlay::kIntersecting:
+      faces(o.intersecting);
+      break;
+    case Overlay::kInverted:
+      faces(o.inverted);
+      break;
+    case Overlay::kContacts:
+      vertices([&](std::size_t v) { return o.contact[v] ? 1.f : 0.f; });
+      break;
+    case Overlay::kMask:
+      vertices([&](std::size_t v) { return 1.f - o.mask[v]; });
+      break;
     case Overlay::kDqsDistance: {
       const float top = std::max(1e-12f, *std::max_element(o.dqs_distance.begin(), o.dqs_distance.end()));
       vertices([&](std::size_t v) { return o.dqs_distance[v] / top; });
@@ -46,7 +56,8 @@ void Panels::render_view(int width, int height) {
   const skinning::Rig& rig = model_.rig();
   skinning::RenderOptions o = view_.options(box_, width, height);
   if (overlay_ != Overlay::kNone)
-    overlay_colours(overlay_, model_.overlays(), std::size_t(rig.rest.rows()), std::size_t(rig.triangles.rows()), o);
+    overlay_colours(overlay_, model_.overlays(), std::size_t(rig.rest.rows()),
+                    std::size_t(rig.triangles.rows()), o);
   camera_ = skinning::frame_camera(o, o.frame);
   texture_.upload(skinning::render_mesh(model_.positions(), rig.triangles, o));
   if (const track::Positions* beside = model_.compare_positions()) {
@@ -64,8 +75,9 @@ void Panels::draw_view(const ImVec2& at, const ImVec2& size) {
   ImGui::SetNextWindowPos(at);
   ImGui::SetNextWindowSize(size);
   ImGui::PushStyleVar(ImGuiStyleVar_WindowPadding, ImVec2(0, 0));
-  ImGui::Begin("view", nullptr,
-               ImGuiWindowFlags_NoDecoration | ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoBringToFrontOnFocus);
+  ImGui::Begin(
+      "view", nullptr,
+      ImGuiWindowFlags_NoDecoration | ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoBringToFrontOnFocus);
   const bool beside = model_.compare().has_value();
   const int w = int(size.x) / (beside ? 2 : 1), h = int(size.y);
   // During a slider drag the view is rendered at half resolution: the software rasterizer then
@@ -97,7 +109,8 @@ void Panels::draw_joints(ImDrawList* dl, const ImVec2& at, const skinning::Camer
   layout_.joints.assign(p.size(), ImVec2(-1e6f, -1e6f));
   for (std::size_t j = 0; j < p.size(); ++j) {
     const Eigen::Vector3d s = camera.project(p[j]);
-    if (s.z() > 0) layout_.joints[j] = ImVec2(at.x + pixel_scale_ * float(s.x()), at.y + pixel_scale_ * float(s.y()));
+    if (s.z() > 0)
+      layout_.joints[j] = ImVec2(at.x + pixel_scale_ * float(s.x()), at.y + pixel_scale_ * float(s.y()));
   }
   const skinning::Rig& rig = model_.rig();
   const ImU32 bone = IM_COL32(kJointRgb[0], kJointRgb[1], kJointRgb[2], 200);

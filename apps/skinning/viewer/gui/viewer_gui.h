@@ -34,9 +34,9 @@ struct ViewState {
 
 /// Where the widgets are (set while drawing, read by the script player).
 struct Layout {
-  ImVec2 view_min{0, 0}, view_max{0, 0};               ///< the 3D view's image on screen
-  std::map<std::string, ImVec4> sliders;                ///< "x", "y", "z", "frame": rect (x0, y0, x1, y1)
-  std::vector<ImVec2> joints;                           ///< each joint's screen position
+  ImVec2 view_min{0, 0}, view_max{0, 0};  ///< the 3D view's image on screen
+  std::map<std::string, ImVec4> sliders;  ///< "x", "y", "z", "frame": rect (x0, y0, x1, y1)
+  std::vector<ImVec2> joints;             ///< each joint's screen position
 };
 
 /// A GL texture holding an RGBA image.

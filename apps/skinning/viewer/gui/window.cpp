@@ -17,13 +17,13 @@
 #include <backends/imgui_impl_opengl3.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cstdio>
 #include <fstream>
+#include <mutex>
 #include <nlohmann/json.hpp>
 #include <sstream>
-#include <atomic>
-#include <mutex>
 #include <thread>
 
 #include "isokit/core/atomic_file.h"
@@ -40,7 +40,8 @@ using Clock = std::chrono::steady_clock;
 
 struct GlfwSession {
   GlfwSession() {
-    glfwSetErrorCallback([](int code, const char* text) { std::fprintf(stderr, "glfw %d: %s\n", code, text); });
+    glfwSetErrorCallback(
+        [](int code, const char* text) { std::fprintf(stderr, "glfw %d: %s\n", code, text); });
     require(glfwInit() == GLFW_TRUE, "isokit-skin view", "cannot initialise GLFW (no display?)",
             "run it on a desktop, or headless under xvfb-run -a");
   }
@@ -89,7 +90,8 @@ skinning::Image read_framebuffer(GLFWwindow* w) {
   glReadBuffer(GL_BACK);
   glReadPixels(0, 0, fw, fh, GL_RGBA, GL_UNSIGNED_BYTE, raw.data());
   const std::size_t row = 4 * std::size_t(fw);
-  for (int y = 0; y < fh; ++y) std::copy_n(raw.data() + row * std::size_t(fh - 1 - y), row, img.rgba.data() + row * std::size_t(y));
+  for (int y = 0; y < fh; ++y)
+    std::copy_n(raw.data() + row * std::size_t(fh - 1 - y), row, img.rgba.data() + row * std::size_t(y));
   for (std::size_t i = 3; i < img.rgba.size(); i += 4) img.rgba[i] = 255;
   return img;
 }
@@ -99,8 +101,10 @@ long count_colour(const skinning::Image& img, const ImVec4& box, const std::uint
   long n = 0;
   for (int y = std::max(0, int(box.y)); y < std::min(img.height, int(box.w)); ++y)
     for (int x = std::max(0, int(box.x)); x < std::min(img.width, int(box.z)); ++x) {
-      const std::uint8_t* p = img.rgba.data() + 4 * (std::size_t(y) * std::size_t(img.width) + std::size_t(x));
-      if (std::abs(p[0] - rgb[0]) <= tol && std::abs(p[1] - rgb[1]) <= tol && std::abs(p[2] - rgb[2]) <= tol) ++n;
+      const std::uint8_t* p =
+          img.rgba.data() + 4 * (std::size_t(y) * std::size_t(img.width) + std::size_t(x));
+      if (std::abs(p[0] - rgb[0]) <= tol && std::abs(p[1] - rgb[1]) <= tol && std::abs(p[2] - rgb[2]) <= tol)
+        ++n;
     }
   return n;
 }
@@ -197,7 +201,8 @@ void Player::apply_input(ImGuiIO& io, const gui::Layout& layout, ViewerModel& mo
     }
     if (e.contains("overlay"))
       for (int o = 0; o <= int(gui::Overlay::kDqsDistance); ++o)
-        if (e["overlay"].get<std::string>() == gui::to_string(gui::Overlay(o))) panels.set_overlay(gui::Overlay(o));
+        if (e["overlay"].get<std::string>() == gui::to_string(gui::Overlay(o)))
+          panels.set_overlay(gui::Overlay(o));
     if (e.contains("clip")) model.play_clip(e["clip"].get<std::string>());
     if (e.contains("frame")) model.set_frame(e["frame"].get<int>());
     if (e.contains("open")) panels.request_open(e["open"].get<std::string>());
@@ -222,8 +227,8 @@ const json* Player::finish_frame(const ViewerModel& model) {
 }
 
 /// The state the gui test checks, with pixel counts of the shot.
-json shot_state(const json& e, const skinning::Image& img, const ViewerModel& model, const gui::Panels& panels,
-                const std::string& file) {
+json shot_state(const json& e, const skinning::Image& img, const ViewerModel& model,
+                const gui::Panels& panels, const std::string& file) {
   const gui::Layout& l = panels.layout();
   const ImVec4 view(l.view_min.x, l.view_min.y, l.view_max.x, l.view_max.y);
   const std::uint8_t red[3] = {std::uint8_t(255 * 0.97f), 30, 30};
@@ -268,13 +273,14 @@ class Opener {
  private:
   void run(const std::string& setup_path, Method method) {
     try {
-      const skinning::SkinSetup setup = setup_path.empty() ? skinning::SkinSetup{} : skinning::load_setup(setup_path);
+      const skinning::SkinSetup setup =
+          setup_path.empty() ? skinning::SkinSetup{} : skinning::load_setup(setup_path);
       const skinning::Progress progress = [this](const std::string& stage, int done, int total) {
         std::lock_guard<std::mutex> lock(mutex_);
         stage_ = stage + " " + std::to_string(done) + " / " + std::to_string(total);
       };
-      auto sk = std::make_shared<skinning::Skinner>(skinning::open_rig(path_, 30, progress, nullptr, setup.mask),
-                                                    setup, progress);
+      auto sk = std::make_shared<skinning::Skinner>(
+          skinning::open_rig(path_, 30, progress, nullptr, setup.mask), setup, progress);
       ViewerOptions vo;
       vo.background = true;
       model_ = std::make_unique<ViewerModel>(sk, method, vo);
@@ -303,8 +309,8 @@ void draw_opening(const Opener& opener) {
 
 /// The script's report: the screenshots, the drag's redraw rate and the lag of the skin shown.
 json report_of(const Player& player, const json& shots, const std::vector<double>& frame_ms,
-               const std::vector<long>& requested, const std::vector<long>& shown, std::vector<double> bake_ms,
-               const gui::Panels& panels) {
+               const std::vector<long>& requested, const std::vector<long>& shown,
+               std::vector<double> bake_ms, const gui::Panels& panels) {
   std::vector<int> lag;  // per drag frame: frames since the request now shown was made
   std::vector<double> drag_ms;
   for (const int f : player.drag_frames()) {
@@ -316,18 +322,20 @@ json report_of(const Player& player, const json& shots, const std::vector<double
   }
   std::sort(drag_ms.begin(), drag_ms.end());
   const double median = drag_ms.empty() ? 0.0 : drag_ms[drag_ms.size() / 2];
-  return {{"screenshots", shots},
-          {"script_failures", player.failures},
-          {"drag", {{"frames", drag_ms.size()},
-                    {"frame_ms_median", median},
-                    {"fps", median > 0 ? 1000.0 / median : 0.0},
-                    {"lag_frames_max", lag.empty() ? 0 : *std::max_element(lag.begin(), lag.end())},
-                    {"lag_frames", lag},
-                    {"bake_ms_median", bake_ms.empty() ? 0.0 : (std::sort(bake_ms.begin(), bake_ms.end()),
-                                                                bake_ms[bake_ms.size() / 2])}}},
-          {"frames", frame_ms.size()},
-          {"message", panels.message()},
-          {"gl_renderer", reinterpret_cast<const char*>(glGetString(GL_RENDERER))}};
+  return {
+      {"screenshots", shots},
+      {"script_failures", player.failures},
+      {"drag",
+       {{"frames", drag_ms.size()},
+        {"frame_ms_median", median},
+        {"fps", median > 0 ? 1000.0 / median : 0.0},
+        {"lag_frames_max", lag.empty() ? 0 : *std::max_element(lag.begin(), lag.end())},
+        {"lag_frames", lag},
+        {"bake_ms_median",
+         bake_ms.empty() ? 0.0 : (std::sort(bake_ms.begin(), bake_ms.end()), bake_ms[bake_ms.size() / 2])}}},
+      {"frames", frame_ms.size()},
+      {"message", panels.message()},
+      {"gl_renderer", reinterpret_cast<const char*>(glGetString(GL_RENDERER))}};
 }
 
 /// The model of the rig on the command line (read and fitted before the window opens).
@@ -404,8 +412,10 @@ int run_viewer(const ViewerGuiOptions& o) {
   }
   if (player) {
     const std::string path = o.report_path.empty() ? o.screenshot_dir + "/viewer-report.json" : o.report_path;
-    write_text_file_atomically(path, report_of(*player, shots, frame_ms, requested, shown, bake_ms, *panels).dump(1) + "\n");
-    for (const std::string& f : player->failures) std::fprintf(stderr, "isokit-skin view: script: %s\n", f.c_str());
+    write_text_file_atomically(
+        path, report_of(*player, shots, frame_ms, requested, shown, bake_ms, *panels).dump(1) + "\n");
+    for (const std::string& f : player->failures)
+      std::fprintf(stderr, "isokit-skin view: script: %s\n", f.c_str());
   }
   glfwDestroyWindow(window);
   return player && !player->failures.empty() ? 2 : 0;

@@ -36,9 +36,9 @@ void linear_blend(const SkinWeights& weights, const std::vector<Affine>& skin, c
 /// Dual-quaternion blending of the rigid parts of `skin` (antipodality fixed against each
 /// vertex's largest-weight joint), applied to each rest vertex first stretched by the blend of
 /// the matrices' stretches `Σ w_j P_j` (Kavan et al. 2008 §4.2: scale keys are kept; with rigid
-/// matrices — within kStretchTolerance — the vertex is used as it is, bit for bit). `rotations`, when not null,
-/// receives each vertex's blended rotation (the 2014 tracker's target rotations R_i, §5.1), times
-/// the stretch blend when there is one (the ARAP targets then keep the scaled edge lengths).
+/// matrices — within kStretchTolerance — the vertex is used as it is, bit for bit). `rotations`, when not
+/// null, receives each vertex's blended rotation (the 2014 tracker's target rotations R_i, §5.1), times the
+/// stretch blend when there is one (the ARAP targets then keep the scaled edge lengths).
 void dual_quaternion_blend(const SkinWeights& weights, const std::vector<Affine>& skin,
                            const track::Positions& rest, track::Positions& out, std::vector<Mat3f>* rotations,
                            std::size_t grain = 1024);

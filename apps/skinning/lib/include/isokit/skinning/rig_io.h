@@ -91,7 +91,7 @@ struct LoadReport {
   int max_influences{0};     ///< most influences on one vertex (after `min_weight`)
   int dropped_triangles{0};  ///< triangles degenerate after welding (kept in the output mesh)
   bool weights_from_file{false};
-  std::string mask_source;   ///< where Rig::relax_mask came from ("" = none)
+  std::string mask_source;  ///< where Rig::relax_mask came from ("" = none)
   std::vector<std::string> warnings;
 };
 

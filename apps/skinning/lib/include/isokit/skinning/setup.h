@@ -48,8 +48,8 @@
 #include <Eigen/Core>
 
 #include "isokit/implicit/fit.h"
-#include "isokit/skinning/rig_io.h"
 #include "isokit/operators/spec.h"
+#include "isokit/skinning/rig_io.h"
 #include "isokit/track/projector2013.h"
 #include "isokit/track/tracker.h"
 
@@ -110,14 +110,14 @@ struct SubstepOptions {
 /// along chosen axes by a curve of one joint's bend angle, composed with its bone's part like a
 /// child part (the implicit methods; LBS and DQS ignore it).
 struct MuscleSetup {
-  std::string name;            ///< for messages and `info`
-  std::string bone;            ///< the joint whose bone carries it (a fitted part)
-  std::string driver;          ///< the joint whose bend angle (from its parent) drives the scale
+  std::string name;                 ///< for messages and `info`
+  std::string bone;                 ///< the joint whose bone carries it (a fitted part)
+  std::string driver;               ///< the joint whose bend angle (from its parent) drives the scale
   Eigen::Vector3d center{0, 0, 0};  ///< centre at rest, in the rig's rest space
   /// Direction of the first semi-axis at rest (normalised; the other two are completed
   /// deterministically). Zero (default): from the bone's joint toward its first child.
   Eigen::Vector3d axis{0, 0, 0};
-  Eigen::Vector3d radii{1, 1, 1};  ///< semi-axes at rest, rest-space units, > 0
+  Eigen::Vector3d radii{1, 1, 1};                 ///< semi-axes at rest, rest-space units, > 0
   std::array<bool, 3> scaled{false, true, true};  ///< axes the curve scales (key `scale_axes`, default "yz")
   /// Scale factor (> 0) against the bend in degrees, knots ascending in [0, 180]: linear between
   /// knots, constant outside (key `curve`: [[degrees, factor], ...]). Default: 1 everywhere.

@@ -31,8 +31,8 @@ class SkinField {
 
   /// The pose of skinning matrices `skin` (one per joint): every primitive moved by the rigid
   /// part of its joint's skinning matrix and stretched by the rest (a clip's scale keys: the
-  /// stretch seen in the primitive's frame, its shear dropped), each muscle (SkinSetup::muscles) moved with its bone
-  /// and scaled by its driver's bend, and (bulge gate, SkinSetup::bulge_gate) each bulge node's
+  /// stretch seen in the primitive's frame, its shear dropped), each muscle (SkinSetup::muscles) moved with
+  /// its bone and scaled by its driver's bend, and (bulge gate, SkinSetup::bulge_gate) each bulge node's
   /// controller capped by its joint's bend. \throw InputError for a wrong matrix count.
   std::shared_ptr<const implicit::Pose> pose_of(const std::vector<Affine>& skin) const;
   /// Makes `pose_of(skin)` the current pose (functions made before keep theirs).
@@ -64,9 +64,9 @@ class SkinField {
   };
   /// A muscle's leaf (SkinSetup::muscles): carried by `bone`, scaled by `driver`'s bend.
   struct MuscleLeaf {
-    int id;                    ///< leaf id in the program
+    int id;                           ///< leaf id in the program
     int bone, driver, driver_parent;  ///< rig joints (skinning-matrix indices)
-    Affine rest;               ///< unit-sphere frame -> rest space (rotation + centre)
+    Affine rest;                      ///< unit-sphere frame -> rest space (rotation + centre)
     MuscleSetup setup;
   };
   struct Skeleton;

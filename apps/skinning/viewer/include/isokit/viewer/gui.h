@@ -13,11 +13,11 @@
 namespace isokit::viewer {
 
 struct ViewerGuiOptions {
-  std::string rig;                    ///< a rig file or `procedural:NAME`
-  std::string clip;                   ///< a clip to play at start ("" = edit the rest pose)
-  std::string setup;                  ///< a setup file ("" = the defaults)
+  std::string rig;                     ///< a rig file or `procedural:NAME`
+  std::string clip;                    ///< a clip to play at start ("" = edit the rest pose)
+  std::string setup;                   ///< a setup file ("" = the defaults)
   std::string method{"tracking2014"};  ///< lbs | dqs | implicit2013 | tracking2014
-  int width{1280}, height{800};       ///< window size in pixels
+  int width{1280}, height{800};        ///< window size in pixels
   /// Headless mode: a JSON script of input events (gui.cpp's file comment); the window closes
   /// after its last event and writes `report_path` (default `screenshot_dir/viewer-report.json`).
   std::string script_path;

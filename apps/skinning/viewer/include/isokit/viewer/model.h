@@ -54,10 +54,10 @@ struct ViewerOptions {
 
 /// Per-vertex and per-triangle flags of the shown frame, for the overlays.
 struct Overlays {
-  std::vector<std::uint8_t> contact;     ///< per vertex: the method's contact flag (implicit methods)
-  std::vector<float> mask;               ///< per vertex: the relaxation mask in use (1 = tracked)
-  std::vector<float> dqs_distance;       ///< per vertex: distance to DQS's position, rig units
-  std::vector<std::uint8_t> inverted;    ///< per triangle: inverted w.r.t. the field (2014 tree)
+  std::vector<std::uint8_t> contact;       ///< per vertex: the method's contact flag (implicit methods)
+  std::vector<float> mask;                 ///< per vertex: the relaxation mask in use (1 = tracked)
+  std::vector<float> dqs_distance;         ///< per vertex: distance to DQS's position, rig units
+  std::vector<std::uint8_t> inverted;      ///< per triangle: inverted w.r.t. the field (2014 tree)
   std::vector<std::uint8_t> intersecting;  ///< per triangle: in a self-intersecting pair
 };
 
@@ -161,14 +161,14 @@ class ViewerModel {
     skinning::FrameStats stats;
     std::vector<std::uint8_t> contact;
     std::vector<float> mask;
-    Pose pose;  ///< the pose it was baked at
+    Pose pose;            ///< the pose it was baked at
     bool measured{true};  ///< stats.metrics computed (in the background: skipped while newer requests wait)
   };
   /// What the shown state needs baked: the edited pose, or a clip frame, for some methods.
   struct Request {
     long id{0};
     std::string clip;
-    Pose pose;  ///< editing: the edited pose; clip: unused
+    Pose pose;                                            ///< editing: the edited pose; clip: unused
     std::shared_ptr<const std::vector<Pose>> clip_poses;  ///< clip: its poses (shared, immutable)
     int frame{0};
     std::vector<Method> methods;
@@ -196,8 +196,8 @@ class ViewerModel {
   std::vector<Pose> clip_poses_;
   int frame_{0};
   std::map<Method, std::unique_ptr<Track>> tracks_;  ///< the baking thread's
-  std::map<Method, Frame> shown_;                     ///< the published frames
-  std::vector<Method> shown_methods_;                 ///< theirs: the method, then the compared one
+  std::map<Method, Frame> shown_;                    ///< the published frames
+  std::vector<Method> shown_methods_;                ///< theirs: the method, then the compared one
   std::optional<Overlays> overlays_;
   long request_id_{0}, shown_id_{0};
   std::shared_ptr<const std::vector<Pose>> clip_shared_;  ///< clip_poses_, for the requests
