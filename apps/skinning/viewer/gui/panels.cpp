@@ -213,10 +213,13 @@ void Panels::draw_stats_panel() {
   ImGui::Text("tracker calls %d (at the cap %d), iterations %d", s.tracker_calls, s.capped_calls,
               s.iterations);
   const skinning::FrameMetrics& m = s.metrics;
-  if (!model_.metrics_shown()) ImGui::TextDisabled("(metrics: measured when the pose rests)");
-  ImGui::Text("self-intersections %d (new %d)", m.self_intersections, m.self_intersections_new);
-  ImGui::Text("inverted triangles %d (new %d)", m.inverted_triangles, m.new_inverted_triangles);
-  ImGui::Text("edge distortion max %.3f, mean %.4f", m.edge_distortion_max, m.edge_distortion_mean);
+  if (!model_.metrics_shown()) {
+    ImGui::TextDisabled("(metrics: measured when the pose rests)");
+  } else {
+    ImGui::Text("self-intersections %d (new %d)", m.self_intersections, m.self_intersections_new);
+    ImGui::Text("inverted triangles %d (new %d)", m.inverted_triangles, m.new_inverted_triangles);
+    ImGui::Text("edge distortion max %.3f, mean %.4f", m.edge_distortion_max, m.edge_distortion_mean);
+  }
   ImGui::Text("frames baked %ld%s", model_.frames_baked(), model_.pending() ? " (baking...)" : "");
   ImGui::Text("%.0f fps", double(ImGui::GetIO().Framerate));
 }
