@@ -58,8 +58,8 @@ ViewerModel::ViewerModel(std::shared_ptr<skinning::Skinner> skinner, Method meth
   require(skinner_ != nullptr, "viewer", "has no rig", "open a rig first");
   angles_.assign(rig().joints.size(), {0.0, 0.0, 0.0});
   if (options_.background) {
-    // Built now: the worker must not build them while the window's thread reads them.
-    skinner_->field(skinning::TreeKind::k2013);
+    // Built now: the overlays read it on the window's thread, the worker must not build it then
+    // (the 2013 tree, which only the worker uses, is built there when a method needs it).
     skinner_->field(skinning::TreeKind::k2014);
     worker_ = std::thread([this] { worker_loop(); });
   }

@@ -254,11 +254,14 @@ void blend_masked(const BakeState& s, const track::Positions& rigid, track::Posi
   }
 }
 
+void check_pose(const Rig& rig, const Pose& p) {
+  require(p.size() == rig.joints.size(), rig.name + ": animation", "a pose has the wrong joint count",
+          "one local transform per joint");
+}
+
 void check_poses(const Rig& rig, const std::vector<Pose>& poses) {
   require(!poses.empty(), rig.name + ": animation", "has no frames", "give a clip, --bend or a pose script");
-  for (const Pose& p : poses)
-    require(p.size() == rig.joints.size(), rig.name + ": animation", "a pose has the wrong joint count",
-            "one local transform per joint");
+  for (const Pose& p : poses) check_pose(rig, p);
 }
 
 /// The 2014 tracker on the rest mesh (2014 §5): iso-values sampled at rest, the rest field given
@@ -454,7 +457,7 @@ FrameBaker::FrameBaker(Skinner& skinner, Method method, const BakeOptions& optio
 FrameBaker::~FrameBaker() = default;
 
 track::Positions FrameBaker::next(const Pose& pose, FrameStats* stats) {
-  check_poses(s_->sk->rig(), {pose});
+  check_pose(s_->sk->rig(), pose);
   FrameStats st;
   const auto t0 = Clock::now();
   track::Positions pos;

@@ -112,7 +112,7 @@ long count_colour(const skinning::Image& img, const ImVec4& box, const std::uint
 /// The script: events, the one being played, and the mouse.
 class Player {
  public:
-  Player(const std::string& path, GLFWwindow* w);
+  explicit Player(const std::string& path);
   bool done() const { return next_ >= events_.size(); }
   /// Feeds this frame's input to ImGui (before NewFrame); applies "set" events to the model.
   void apply_input(ImGuiIO& io, const gui::Layout& layout, ViewerModel& model, gui::Panels& panels);
@@ -132,7 +132,7 @@ class Player {
   std::vector<int> drag_frames_;
 };
 
-Player::Player(const std::string& path, GLFWwindow* w) {
+Player::Player(const std::string& path) {
   std::ifstream in(path);
   require(bool(in), path, "cannot be read", "check the script path");
   std::stringstream ss;
@@ -145,12 +145,37 @@ Player::Player(const std::string& path, GLFWwindow* w) {
   }
   require(j.is_object() && j.contains("events") && j["events"].is_array(), path, "needs an \"events\" list",
           "see apps/skinning/viewer/gui/window.cpp for the events");
-  for (const json& e : j["events"]) {
-    require(e.is_object() && e.contains("type") && e["type"].is_string(), path, "an event has no \"type\"",
+  for (std::size_t k = 0; k < j["events"].size(); ++k) {
+    const json& e = j["events"][k];
+    const std::string where = path + ": events[" + std::to_string(k) + "]";
+    require(e.is_object() && e.contains("type") && e["type"].is_string(), where, "has no \"type\"",
             "give each event a type");
+    const std::string type = e["type"].get<std::string>();
+    static const char* const kTypes[] = {"move",   "press",      "release", "wheel",
+                                         "frames", "wait_baked", "set",     "screenshot"};
+    require(std::find(std::begin(kTypes), std::end(kTypes), type) != std::end(kTypes), where,
+            "unknown type '" + type + "'",
+            "use move, press, release, wheel, frames, wait_baked, set or screenshot");
+    if (type == "move") {
+      const json* t = e.contains("to") ? &e["to"] : nullptr;
+      const bool px = t && t->is_object() && t->contains("px") && (*t)["px"].is_array() &&
+                      (*t)["px"].size() == 2 && (*t)["px"][0].is_number() && (*t)["px"][1].is_number();
+      const bool joint = t && t->is_object() && t->contains("joint") && (*t)["joint"].is_string();
+      const bool slider = t && t->is_object() && t->contains("slider") && (*t)["slider"].is_string() &&
+                          (!t->contains("value") || (*t)["value"].is_number());
+      require(px || joint || slider, where + ".to", "is not a target",
+              R"(give {"px": [x, y]}, {"joint": NAME} or {"slider": "x", "value": V})");
+    }
+    require(!e.contains("delta") || e["delta"].is_number(), where + ".delta", "must be a number",
+            "fix the script");
+    for (const char* key : {"frames", "n", "max_frames", "button", "frame"})
+      require(!e.contains(key) || e[key].is_number_integer(), where + "." + key, "must be an integer",
+              "fix the script");
+    for (const char* key : {"method", "compare", "overlay", "clip", "open", "name"})
+      require(!e.contains(key) || e[key].is_string(), where + "." + key, "must be a string",
+              "fix the script");
     events_.push_back(e);
   }
-  (void)w;
 }
 
 ImVec2 Player::target(const json& t, const gui::Layout& layout, const ViewerModel& model) {
@@ -357,12 +382,14 @@ std::unique_ptr<ViewerModel> initial_model(const ViewerGuiOptions& o) {
 }  // namespace
 
 int run_viewer(const ViewerGuiOptions& o) {
-  GlfwSession glfw;  // first: without a display, fail before fitting anything
+  require(o.width >= 320 && o.width <= 8192 && o.height >= 200 && o.height <= 8192, "isokit-skin view --size",
+          "must be 320 to 8192 pixels wide (got " + std::to_string(o.width) + ")", "give e.g. --size 1280");
+  std::unique_ptr<Player> player;  // a bad script fails before anything is fitted
+  if (!o.script_path.empty()) player = std::make_unique<Player>(o.script_path);
+  GlfwSession glfw;  // without a display, fail before fitting anything
   std::unique_ptr<ViewerModel> model = initial_model(o);
   GLFWwindow* window = open_window(o);
   ImGuiSession imgui(window);
-  std::unique_ptr<Player> player;
-  if (!o.script_path.empty()) player = std::make_unique<Player>(o.script_path, window);
   auto panels = std::make_unique<gui::Panels>(*model);
   std::unique_ptr<Opener> opener;
   json shots = json::array();

@@ -22,7 +22,8 @@
 /// sub-steps over the jump), and `poll()` (once per drawn frame) publishes what the worker
 /// finished; until then the queries show the last finished frame (`pending()`). The worker alone
 /// uses the skinner and the bakers (nothing else may use that skinner while the model lives, but
-/// between `wait_idle()` and the next request); the fields are built before it starts.
+/// between `wait_idle()` and the next request); the 2014 field, which the overlays read, is built
+/// before it starts.
 #pragma once
 
 #include <array>
