@@ -53,28 +53,6 @@ std::string fmt(const char* f, double v) {
 
 }  // namespace
 
-// ---- Texture ----
-
-Texture::~Texture() {
-  if (name_ != 0) glDeleteTextures(1, &name_);
-}
-
-void Texture::upload(const plot::RgbaImage& image) {
-  if (name_ == 0) glGenTextures(1, &name_);
-  glBindTexture(GL_TEXTURE_2D, name_);
-  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
-  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
-  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
-  glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-  glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA, image.width, image.height, 0, GL_RGBA, GL_UNSIGNED_BYTE,
-               image.pixels.data());
-}
-
-ImTextureID Texture::id() const {
-  return reinterpret_cast<ImTextureID>(static_cast<std::uintptr_t>(name_));
-}
-
 // ---- Panels ----
 
 Panels::Panels(StudioModel& model, GuiOptions options) : model_(model), options_(std::move(options)) {

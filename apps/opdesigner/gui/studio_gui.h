@@ -16,6 +16,7 @@
 #include "isokit/studio/model.h"
 #include "isokit/studio/script.h"
 #include "isokit/studio/view.h"
+#include "kit/gl_window.h"
 
 struct GLFWwindow;
 
@@ -43,18 +44,11 @@ struct FrameStats {
   std::vector<int> upload_frames;  ///< frames in which the slice texture was rebuilt
 };
 
-/// A GL texture holding an RGBA image (GL 1.1 calls only).
-class Texture {
+/// A GL texture holding an RGBA image.
+class Texture : public gui_kit::Texture {
  public:
-  Texture() = default;
-  ~Texture();
-  Texture(const Texture&) = delete;
-  Texture& operator=(const Texture&) = delete;
-  void upload(const plot::RgbaImage& image);
-  ImTextureID id() const;
-
- private:
-  unsigned int name_{0};
+  using gui_kit::Texture::upload;
+  void upload(const plot::RgbaImage& image) { upload(image.width, image.height, image.pixels.data()); }
 };
 
 /// The studio's widgets over a model; draw() builds one ImGui frame.

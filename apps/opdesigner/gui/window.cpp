@@ -14,6 +14,7 @@
 
 #include "isokit/core/atomic_file.h"
 #include "isokit/core/error.h"
+#include "kit/gl_window.h"
 #include "studio_gui.h"
 
 namespace isokit::studio {
@@ -21,30 +22,6 @@ namespace {
 
 using nlohmann::json;
 using Clock = std::chrono::steady_clock;
-
-struct GlfwSession {
-  GlfwSession() {
-    glfwSetErrorCallback(
-        [](int code, const char* text) { std::fprintf(stderr, "glfw %d: %s\n", code, text); });
-    require(glfwInit() == GLFW_TRUE, "the design studio", "cannot initialise GLFW (no display?)",
-            "run it on a desktop, or headless under xvfb-run -a");
-  }
-  ~GlfwSession() { glfwTerminate(); }
-};
-
-GLFWwindow* open_window(const GuiOptions& o) {
-  glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 3);
-  glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 3);
-  glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
-  glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
-  glfwWindowHint(GLFW_RESIZABLE, o.script_path.empty() ? GLFW_TRUE : GLFW_FALSE);
-  GLFWwindow* w = glfwCreateWindow(o.width, o.height, "isokit operator studio", nullptr, nullptr);
-  require(w != nullptr, "the design studio", "cannot open an OpenGL 3.3 window",
-          "check the display and the GL driver (headless: xvfb-run with Mesa's libgl1-mesa-dri)");
-  glfwMakeContextCurrent(w);
-  glfwSwapInterval(o.vsync && o.script_path.empty() ? 1 : 0);
-  return w;
-}
 
 std::unique_ptr<StudioModel> open_model(const GuiOptions& o) {
   StudioOptions so;
@@ -57,20 +34,8 @@ std::unique_ptr<StudioModel> open_model(const GuiOptions& o) {
 }
 
 plot::RgbaImage read_framebuffer(GLFWwindow* w) {
-  int fw = 0, fh = 0;
-  glfwGetFramebufferSize(w, &fw, &fh);
   plot::RgbaImage img;
-  img.width = fw;
-  img.height = fh;
-  img.pixels.resize(4 * static_cast<std::size_t>(fw) * fh);
-  std::vector<std::uint8_t> raw(img.pixels.size());
-  glPixelStorei(GL_PACK_ALIGNMENT, 1);
-  glReadBuffer(GL_BACK);
-  glReadPixels(0, 0, fw, fh, GL_RGBA, GL_UNSIGNED_BYTE, raw.data());
-  const std::size_t row = 4 * static_cast<std::size_t>(fw);
-  for (int y = 0; y < fh; ++y)  // GL rows are bottom to top
-    std::copy_n(raw.data() + row * (fh - 1 - y), row, img.pixels.data() + row * y);
-  for (std::size_t i = 3; i < img.pixels.size(); i += 4) img.pixels[i] = 255;
+  img.pixels = gui_kit::read_framebuffer(w, img.width, img.height);
   return img;
 }
 
@@ -175,30 +140,15 @@ void take(const ScriptEvent& e, GLFWwindow* w, StudioModel& model, const gui::La
   }
 }
 
-struct ImGuiSession {
-  explicit ImGuiSession(GLFWwindow* w) {
-    IMGUI_CHECKVERSION();
-    ImGui::CreateContext();
-    ImGui::GetIO().IniFilename = nullptr;
-    ImGui::StyleColorsDark();
-    ImGui_ImplGlfw_InitForOpenGL(w, true);
-    ImGui_ImplOpenGL3_Init("#version 330 core");
-  }
-  ~ImGuiSession() {
-    ImGui_ImplOpenGL3_Shutdown();
-    ImGui_ImplGlfw_Shutdown();
-    ImGui::DestroyContext();
-  }
-};
-
 }  // namespace
 int run_gui(const GuiOptions& o) {
   std::vector<ScriptEvent> events;
   if (!o.script_path.empty()) events = load_script(o.script_path);
-  GlfwSession glfw;  // first: without a display, fail before solving anything
+  gui_kit::GlfwSession glfw("the design studio");  // first: without a display, fail before solving anything
   std::unique_ptr<StudioModel> model = open_model(o);
-  GLFWwindow* window = open_window(o);
-  ImGuiSession imgui(window);
+  GLFWwindow* window = gui_kit::open_window("the design studio", "isokit operator studio", o.width, o.height,
+                                            !o.script_path.empty(), o.vsync);
+  gui_kit::ImGuiSession imgui(window);
   gui::Panels panels(*model, o);
   std::optional<gui::ScriptPlayer> player;
   if (!o.script_path.empty()) player.emplace(std::move(events), window);

@@ -1,8 +1,6 @@
 // SPDX-License-Identifier: MIT
 // The viewer's widgets: the side panel (joints, pose edits, clips, methods, overlays, statistics)
 // and the 3D view (software-rendered image, joints drawn over it, orbit / zoom / pan, picking).
-#include <GL/gl.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -46,24 +44,6 @@ skinning::RenderOptions ViewState::options(const Eigen::AlignedBox3d& box, int w
   o.frame = Eigen::AlignedBox3d(centre - half, centre + half);
   o.background = Eigen::Vector3f(0.93f, 0.94f, 0.96f);
   return o;
-}
-
-Texture::~Texture() {
-  if (name_ != 0) glDeleteTextures(1, &name_);
-}
-
-void Texture::upload(const skinning::Image& image) {
-  if (name_ == 0) glGenTextures(1, &name_);
-  glBindTexture(GL_TEXTURE_2D, name_);
-  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
-  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-  glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-  glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA, image.width, image.height, 0, GL_RGBA, GL_UNSIGNED_BYTE,
-               image.rgba.data());
-}
-
-ImTextureID Texture::id() const {
-  return reinterpret_cast<ImTextureID>(static_cast<std::uintptr_t>(name_));
 }
 
 Panels::Panels(ViewerModel& model) : model_(model) {

@@ -59,11 +59,13 @@ void Panels::render_view(int width, int height) {
     overlay_colours(overlay_, model_.overlays(), std::size_t(rig.rest.rows()),
                     std::size_t(rig.triangles.rows()), o);
   camera_ = skinning::frame_camera(o, o.frame);
-  texture_.upload(skinning::render_mesh(model_.positions(), rig.triangles, o));
+  const skinning::Image main_view = skinning::render_mesh(model_.positions(), rig.triangles, o);
+  texture_.upload(main_view.width, main_view.height, main_view.rgba.data());
   if (const track::Positions* beside = model_.compare_positions()) {
     o.face_colors.resize(0, 3);
     o.vertex_colors.resize(0, 3);
-    texture_beside_.upload(skinning::render_mesh(*beside, rig.triangles, o));
+    const skinning::Image beside_view = skinning::render_mesh(*beside, rig.triangles, o);
+    texture_beside_.upload(beside_view.width, beside_view.height, beside_view.rgba.data());
   }
   rendered_id_ = model_.shown_id();
   rendered_w_ = width, rendered_h_ = height;

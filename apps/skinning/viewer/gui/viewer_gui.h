@@ -14,6 +14,7 @@
 
 #include "isokit/skinning/render.h"
 #include "isokit/viewer/model.h"
+#include "kit/gl_window.h"
 
 namespace isokit::viewer::gui {
 
@@ -40,18 +41,7 @@ struct Layout {
 };
 
 /// A GL texture holding an RGBA image.
-class Texture {
- public:
-  Texture() = default;
-  ~Texture();
-  Texture(const Texture&) = delete;
-  Texture& operator=(const Texture&) = delete;
-  void upload(const skinning::Image& image);
-  ImTextureID id() const;
-
- private:
-  unsigned int name_{0};
-};
+using Texture = gui_kit::Texture;
 
 /// The viewer's widgets over a model; draw() builds one ImGui frame.
 class Panels {

@@ -38,61 +38,9 @@ namespace {
 using nlohmann::json;
 using Clock = std::chrono::steady_clock;
 
-struct GlfwSession {
-  GlfwSession() {
-    glfwSetErrorCallback(
-        [](int code, const char* text) { std::fprintf(stderr, "glfw %d: %s\n", code, text); });
-    require(glfwInit() == GLFW_TRUE, "isokit-skin view", "cannot initialise GLFW (no display?)",
-            "run it on a desktop, or headless under xvfb-run -a");
-  }
-  ~GlfwSession() { glfwTerminate(); }
-};
-
-struct ImGuiSession {
-  explicit ImGuiSession(GLFWwindow* w) {
-    IMGUI_CHECKVERSION();
-    ImGui::CreateContext();
-    ImGui::GetIO().IniFilename = nullptr;
-    ImGui::StyleColorsDark();
-    ImGui_ImplGlfw_InitForOpenGL(w, true);
-    ImGui_ImplOpenGL3_Init("#version 330 core");
-  }
-  ~ImGuiSession() {
-    ImGui_ImplOpenGL3_Shutdown();
-    ImGui_ImplGlfw_Shutdown();
-    ImGui::DestroyContext();
-  }
-};
-
-GLFWwindow* open_window(const ViewerGuiOptions& o) {
-  glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 3);
-  glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 3);
-  glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
-  glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
-  glfwWindowHint(GLFW_RESIZABLE, o.script_path.empty() ? GLFW_TRUE : GLFW_FALSE);
-  GLFWwindow* w = glfwCreateWindow(o.width, o.height, "isokit skinning viewer", nullptr, nullptr);
-  require(w != nullptr, "isokit-skin view", "cannot open an OpenGL 3.3 window",
-          "check the display and the GL driver (headless: xvfb-run with Mesa's libgl1-mesa-dri)");
-  glfwMakeContextCurrent(w);
-  glfwSwapInterval(o.script_path.empty() ? 1 : 0);
-  return w;
-}
-
 skinning::Image read_framebuffer(GLFWwindow* w) {
-  int fw = 0, fh = 0;
-  glfwGetFramebufferSize(w, &fw, &fh);
   skinning::Image img;
-  img.width = fw;
-  img.height = fh;
-  img.rgba.resize(4 * std::size_t(fw) * std::size_t(fh));
-  std::vector<std::uint8_t> raw(img.rgba.size());
-  glPixelStorei(GL_PACK_ALIGNMENT, 1);
-  glReadBuffer(GL_BACK);
-  glReadPixels(0, 0, fw, fh, GL_RGBA, GL_UNSIGNED_BYTE, raw.data());
-  const std::size_t row = 4 * std::size_t(fw);
-  for (int y = 0; y < fh; ++y)
-    std::copy_n(raw.data() + row * std::size_t(fh - 1 - y), row, img.rgba.data() + row * std::size_t(y));
-  for (std::size_t i = 3; i < img.rgba.size(); i += 4) img.rgba[i] = 255;
+  img.rgba = gui_kit::read_framebuffer(w, img.width, img.height);
   return img;
 }
 
@@ -386,10 +334,11 @@ int run_viewer(const ViewerGuiOptions& o) {
           "must be 320 to 8192 pixels wide (got " + std::to_string(o.width) + ")", "give e.g. --size 1280");
   std::unique_ptr<Player> player;  // a bad script fails before anything is fitted
   if (!o.script_path.empty()) player = std::make_unique<Player>(o.script_path);
-  GlfwSession glfw;  // without a display, fail before fitting anything
+  gui_kit::GlfwSession glfw("isokit-skin view");  // without a display, fail before fitting anything
   std::unique_ptr<ViewerModel> model = initial_model(o);
-  GLFWwindow* window = open_window(o);
-  ImGuiSession imgui(window);
+  GLFWwindow* window = gui_kit::open_window("isokit-skin view", "isokit skinning viewer", o.width, o.height,
+                                            !o.script_path.empty(), true);
+  gui_kit::ImGuiSession imgui(window);
   auto panels = std::make_unique<gui::Panels>(*model);
   std::unique_ptr<Opener> opener;
   json shots = json::array();
