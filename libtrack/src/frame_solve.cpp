@@ -352,6 +352,7 @@ void solve_frame(TrackState& s, TangentSolver& solver) {
   Snapshot snap;
   std::vector<Vec3f> before;
   for (int k = 0; k < o.max_iterations; ++k) {
+    if (interrupted(s)) break;
     plane_normals(s, f);
     curvature_terms(s, f);
     solver.solve(s, f.normals, f.curvature, f.d);

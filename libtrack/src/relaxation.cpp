@@ -74,15 +74,18 @@ bool iterate(TrackState& s, RelaxationStrategy& strategy, int k) {
 
 void relax(TrackState& s, RelaxationStrategy& strategy) {
   select_start(s);
-  for (int k = 0; k < s.m.options.max_iterations; ++k)
+  for (int k = 0; k < s.m.options.max_iterations; ++k) {
+    if (interrupted(s)) break;
     if (iterate(s, strategy, k)) {
       s.stats.converged = true;
       break;
     }
+  }
   if (s.m.options.max_iterations == 0) s.stats.converged = true;
   // Stopped by the iteration cap: the vertices last moved on a linearised field take one
   // evaluated Newton step (no tangential step), so that none ends on a linearisation.
-  if (!s.stats.converged && s.lazy_on && !settle(s, false)) sweep(s, false, true);
+  // (Not when abandoned: the positions are a starting guess for the caller's next call.)
+  if (!s.stats.converged && !s.stats.abandoned && s.lazy_on && !settle(s, false)) sweep(s, false, true);
   s.stats.field_evaluations = s.evaluations;
   if (s.first) std::fill(s.touched.begin(), s.touched.end(), std::uint8_t{1});  // nothing evaluated yet
 }

@@ -5,6 +5,7 @@
 
 #include <atomic>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -56,19 +57,20 @@ struct TrackerModel {
   Triangles triangles;
   std::vector<Vec3f> rest;
   std::vector<float> iso;
-  Adjacency adj;                            // one-ring
-  Adjacency vertex_faces;                   // CSR: the triangles around each vertex
-  std::vector<float> weights;               // cotangent weights per directed edge (adj.neighbors)
-  std::vector<float> weight_sum;            // per vertex
-  std::vector<float> max_step;              // longest Newton step per vertex
-  std::vector<float> mask;                  // relaxation mask
-  std::vector<float> anchor_k;              // anchor stiffness (empty: all 0)
-  std::vector<std::uint8_t> repair_mask;    // fold / orientation repair: may move (empty: all)
-  std::vector<float> lazy_r2;               // squared lazy evaluation radius bound per vertex
-  float diagonal{0};                        // rest bounding-box diagonal
-  std::vector<std::uint8_t> rest_inverted;  // per triangle (empty: none recorded)
-  std::vector<std::uint8_t> free;           // per vertex: free vertex (set_rest_field; all 0 before)
-  TangentSolverCache global;                // kGlobal: factor and bases between calls
+  Adjacency adj;                              // one-ring
+  Adjacency vertex_faces;                     // CSR: the triangles around each vertex
+  std::vector<float> weights;                 // cotangent weights per directed edge (adj.neighbors)
+  std::vector<float> weight_sum;              // per vertex
+  std::vector<float> max_step;                // longest Newton step per vertex
+  std::vector<float> mask;                    // relaxation mask
+  std::vector<float> anchor_k;                // anchor stiffness (empty: all 0)
+  std::vector<std::uint8_t> repair_mask;      // fold / orientation repair: may move (empty: all)
+  std::vector<float> lazy_r2;                 // squared lazy evaluation radius bound per vertex
+  float diagonal{0};                          // rest bounding-box diagonal
+  std::vector<std::uint8_t> rest_inverted;    // per triangle (empty: none recorded)
+  std::vector<std::uint8_t> free;             // per vertex: free vertex (set_rest_field; all 0 before)
+  TangentSolverCache global;                  // kGlobal: factor and bases between calls
+  std::function<TrackInterrupt()> interrupt;  // set_interrupt: tested before each iteration
   // Outputs of the last call.
   VertexFlags flags;                        // caller's order
   std::vector<std::uint8_t> last_inverted;  // per triangle, at the end of the last call
@@ -146,5 +148,15 @@ struct TrackState {
   std::vector<std::uint8_t> inverted, fresh;
   TrackStats stats;
 };
+
+/// The caller's interrupt (IsoSurfaceTracker::set_interrupt) asks the relaxation to stop or to
+/// abandon the call: noted in the call's statistics.
+inline bool interrupted(TrackState& s) {
+  const TrackInterrupt q = s.m.interrupt ? s.m.interrupt() : TrackInterrupt::kContinue;
+  if (q == TrackInterrupt::kContinue) return false;
+  s.stats.interrupted = true;
+  s.stats.abandoned = q == TrackInterrupt::kAbandon;
+  return true;
+}
 
 }  // namespace isokit::track::detail

@@ -110,6 +110,16 @@ void IsoSurfaceTracker::set_anchor_stiffness(std::vector<float> stiffness) {
   if (!same) m.global.reset();
 }
 
+void IsoSurfaceTracker::set_max_iterations(int iterations) {
+  require(iterations >= 0, "tracker iterations", "must be >= 0 (got " + std::to_string(iterations) + ")",
+          "use e.g. 100");
+  model_->options.max_iterations = iterations;
+}
+
+void IsoSurfaceTracker::set_interrupt(std::function<TrackInterrupt()> interrupt) {
+  model_->interrupt = std::move(interrupt);
+}
+
 void IsoSurfaceTracker::set_fold_repair_mask(std::vector<std::uint8_t> mask) {
   detail::TrackerModel& m = *model_;
   require(mask.empty() || mask.size() == m.mask.size(), "fold repair mask",
@@ -192,6 +202,19 @@ void finish(detail::TrackState& s, detail::TrackerModel& m, Positions& positions
   detail::from_points(cur, positions);
 }
 
+/// An abandoned call (TrackInterrupt::kAbandon): the positions where the relaxation stopped, the
+/// last finished call's flags kept.
+TrackStats abandon(detail::TrackState& s, const detail::TrackerModel& m, Positions& positions,
+                   std::chrono::steady_clock::time_point t0) {
+  std::vector<Vec3f>& cur = s.cur;
+  for (std::size_t i = 0; i < s.n; ++i)
+    if (!detail::finite(cur[i])) cur[i] = detail::row(positions, static_cast<Eigen::Index>(m.caller(i)));
+  if (!m.order.empty()) cur = detail::permuted(cur, m.rank);
+  detail::from_points(cur, positions);
+  s.stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return s.stats;
+}
+
 }  // namespace
 
 TrackStats IsoSurfaceTracker::track(const FieldFunction& field, const std::vector<Mat3f>& rotations,
@@ -229,6 +252,7 @@ TrackStats IsoSurfaceTracker::track(const FieldFunction& field, const std::vecto
         s.cg ? detail::cg_relaxation(s) : detail::jacobi_relaxation();
     detail::relax(s, *strategy);  // 2. tangential ARAP relaxation + Newton (2014 §5 stage 3, §5.2)
   }
+  if (s.stats.abandoned) return abandon(s, m, positions, t0);
   detail::mark_contacts(s);    // 3. contacts: field flags, angle rule (2013 §5), folds
   detail::smooth_contacts(s);  // 4. β-diffused Laplacian smoothing (2013 §5 eq. 7)
   detail::repair_folds(s);     // 5. fold repair (not in the papers)

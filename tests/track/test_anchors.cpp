@@ -13,6 +13,7 @@
 
 #include "isokit/core/error.h"
 #include "isokit/track/tracker.h"
+#include "sphere_scene.h"
 #include "test_util.h"
 #include "track_fixtures.h"
 
@@ -34,27 +35,7 @@ TrackerOptions options_for(Relaxation r) {
   return o;
 }
 
-/// A sphere mesh, its field moved by `shift`, and an initial guess: rest + shift + a random
-/// perturbation of `noise` (a few percent of an edge) in every direction.
-struct Scene {
-  test::Mesh mesh = test::capsule_mesh(0.5f, 0.f, 20, 0, 10);
-  std::shared_ptr<implicit::SphereField> rest_field =
-      std::make_shared<implicit::SphereField>(Vec3f{0, 0, 0}, 0.5f);
-  std::shared_ptr<implicit::SphereField> field;
-  std::vector<float> iso = sample_iso_values(test::as_function(rest_field), mesh.V);
-  Positions start;
-
-  Scene(const Vec3f& shift, float noise, std::uint32_t seed) {
-    field = std::make_shared<implicit::SphereField>(shift, 0.5f);
-    test::Rng rng(seed);
-    start = mesh.V;
-    for (Eigen::Index i = 0; i < start.rows(); ++i) {
-      const Vec3d n = rng.unit();
-      start.row(i) += Eigen::RowVector3f(shift.x, shift.y, shift.z) +
-                      noise * Eigen::RowVector3f(float(n.x), float(n.y), float(n.z));
-    }
-  }
-};
+using Scene = test::SphereScene;
 
 /// Largest distance between rows `rows` of two position sets.
 float max_distance_on(const Positions& a, const Positions& b, const std::vector<int>& rows) {

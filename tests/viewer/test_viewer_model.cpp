@@ -191,6 +191,7 @@ TEST_CASE("viewer: baking in the background shows the last finished frame, then 
   auto sk = cylinder();
   ViewerOptions bg = quick();
   bg.background = true;
+  bg.edit_slice_ms = 0;  // edits baked whole: the frames equal the synchronous ones bit for bit
   ViewerModel a(sk, Method::kTracking2014, bg);
   ViewerModel b(cylinder(), Method::kTracking2014, quick());  // its own skinner: a's worker uses sk
   CHECK(a.positions() == b.positions());                      // the first frame is waited for
@@ -222,6 +223,57 @@ TEST_CASE("viewer: baking in the background shows the last finished frame, then 
   CHECK(*a.compare_positions() == sk->bake(Method::kDqs, poses, quick_bake()).frames[5]);
   const viewer::Overlays& o = a.overlays();
   CHECK(o.dqs_distance.size() == static_cast<std::size_t>(sk->rig().rest.rows()));
+}
+
+TEST_CASE("viewer: an edit cut short is shown at once and settles as the whole bake", "[viewer][unit]") {
+  auto sk = cylinder(false);
+  ViewerOptions sliced = quick();
+  sliced.background = true;
+  sliced.edit_slice_ms = 1e-6;  // the first call is cut short before its first iteration
+  ViewerModel a(sk, Method::kTracking2014, sliced);
+  ViewerModel b(cylinder(false), Method::kTracking2014, quick());
+  const double diagonal = (sk->rig().rest.colwise().maxCoeff() - sk->rig().rest.colwise().minCoeff()).norm();
+  const int budget = sk->setup().tracker.max_iterations;
+  auto settled_as_whole = [&](const char* what) {
+    const FrameStats& sa = a.stats();
+    const FrameStats& sb = b.stats();
+    const FrameMetrics& ma = sa.metrics;
+    const FrameMetrics& mb = sb.metrics;
+    INFO(what << ": whole " << sb.iterations << " iterations, sliced " << sa.iterations << " in "
+              << sa.tracker_calls << " calls; edge mean " << ma.edge_distortion_mean << " / "
+              << mb.edge_distortion_mean << ", iso max " << ma.iso_residual_max << " / "
+              << mb.iso_residual_max);
+    REQUIRE(a.metrics_shown());                  // measured once the pose rested
+    CHECK(sa.tracker_calls == sa.substeps + 1);  // cut short, then the rest at the same pose
+    for (int k = 0; k < sa.substeps; ++k) CHECK(sa.call_iterations[std::size_t(k)] == 0);
+    CHECK(sa.iterations <= budget * sa.substeps);  // no more work than the whole bake may do
+    CHECK(ma.edge_distortion_mean <= 1.1 * mb.edge_distortion_mean + 1e-3);
+    CHECK(ma.edge_distortion_max <= 1.25 * mb.edge_distortion_max + 1e-2);
+    CHECK(ma.iso_residual_max <= 2 * mb.iso_residual_max + 1e-5);
+    CHECK(std::abs(ma.volume_ratio - mb.volume_ratio) <= 5e-3);
+    CHECK(ma.new_inverted_triangles <= mb.new_inverted_triangles);
+    CHECK((a.positions() - b.positions()).rowwise().norm().maxCoeff() <= 1.5e-2 * diagonal);
+  };
+  for (const double angle : {50.0, 100.0, 20.0}) {
+    a.set_joint_angles(1, {angle, 0, 0});
+    b.set_joint_angles(1, {angle, 0, 0});
+    CHECK(a.poll(60e3));  // returns once the first part (or already the rest) is published
+    CHECK(a.shown_id() == a.request_id());
+    a.wait_idle();
+    settled_as_whole("one edit");
+  }
+  // A burst: the edits replace each other or cut the slicing short; the last settles.
+  a.begin_drag();
+  b.begin_drag();
+  for (int k = 1; k <= 10; ++k) {
+    a.set_joint_angles(1, {20.0 + 8.0 * k, 0, 0});
+    b.set_joint_angles(1, {20.0 + 8.0 * k, 0, 0});
+  }
+  a.end_drag();
+  b.end_drag();
+  a.wait_idle();
+  CHECK(a.shown_id() == a.request_id());
+  settled_as_whole("a drag");
 }
 
 TEST_CASE("viewer: a clip exported from the viewer is the glb bake writes", "[viewer][unit]") {

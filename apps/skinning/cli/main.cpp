@@ -301,6 +301,15 @@ CLI::App* add_view(CLI::App& app, isokit::viewer::ViewerGuiOptions& v) {
   view->add_option("--setup", v.setup, "JSON setup file");
   view->add_option("--method", v.method, "lbs | dqs | implicit2013 | tracking2014")->capture_default_str();
   view->add_option("--size", v.width, "window width in pixels")->capture_default_str();
+  view->add_option(
+          "--edit-slice-ms", v.edit_slice_ms,
+          "an edited pose's skin is shown after this many ms of its solve, then when it is done (0 = whole)")
+      ->check(CLI::Range(0.0, 1000.0))
+      ->capture_default_str();
+  view->add_option("--skin-wait-ms", v.skin_wait_ms,
+                   "each frame waits up to this many ms for the last edit's skin (0 = never)")
+      ->check(CLI::Range(0.0, 1000.0))
+      ->capture_default_str();
   view->add_option("--script", v.script_path,
                    "headless: replay this JSON script of input events, then close");
   view->add_option("--screenshot-dir", v.screenshot_dir, "where the script's screenshots and report go");

@@ -27,6 +27,10 @@ using skinning::Rig;
 struct ViewerModel::Track {
   std::unique_ptr<FrameBaker> edit_baker;
   Frame edit_frame;
+  // A sliced edit (ViewerOptions::edit_slice_ms): the iterations its pose may still spend, whether
+  // its solve is unfinished.
+  int iterations_left{0};
+  bool unfinished{false};
   std::unique_ptr<FrameBaker> clip_baker;
   std::string clip;
   std::vector<Frame> clip_frames;
@@ -301,23 +305,98 @@ void ViewerModel::refresh() {
   wake_.notify_all();
 }
 
+namespace {
+
+/// Adds the work of a call that continued a frame at its pose to the frame's statistics.
+void add_slice(const skinning::FrameStats& slice, skinning::FrameStats& st) {
+  st.ms += slice.ms;
+  st.iterations += slice.iterations;
+  st.vertex_updates += slice.vertex_updates;
+  st.field_evaluations += slice.field_evaluations;
+  st.axis_guard_moves += slice.axis_guard_moves;
+  st.oriented_vertices += slice.oriented_vertices;
+  st.lost_vertices = slice.lost_vertices;
+  st.tracker_calls += slice.tracker_calls;
+  st.capped_calls = slice.capped_calls;  // whether the pose's solve is still unfinished
+  st.call_iterations.insert(st.call_iterations.end(), slice.call_iterations.begin(),
+                            slice.call_iterations.end());
+}
+
+}  // namespace
+
+void ViewerModel::Frame::bake(FrameBaker& baker, const Pose& at, bool with_metrics) {
+  positions = baker.next(at, &stats);
+  contact = baker.contacts() ? *baker.contacts() : std::vector<std::uint8_t>{};
+  excluded = baker.iso_exclusions();
+  mask = baker.mask();
+  pose = at;
+  measured = with_metrics;
+}
+
+// The edited pose's frame by one method: whole, or (sliced: tracking2014 in the background) cut
+// short after ViewerOptions::edit_slice_ms or by a newer request, its solve left to refine().
+void ViewerModel::bake_edit(Track& t, const Pose& pose) {
+  FrameBaker& baker = *t.edit_baker;
+  const bool sliced =
+      options_.background && options_.edit_slice_ms > 0 && baker.method() == Method::kTracking2014;
+  Frame& f = t.edit_frame;
+  if (!sliced) {
+    f.bake(baker, pose, !options_.background);
+    return;
+  }
+  const auto start = std::chrono::steady_clock::now();
+  baker.set_iteration_cap(0);
+  baker.set_interrupt([this, start] {  // shown when the time is up or a newer edit waits
+    const std::chrono::duration<double, std::milli> spent = std::chrono::steady_clock::now() - start;
+    return spent.count() >= options_.edit_slice_ms || newer_request() ? track::TrackInterrupt::kStop
+                                                                      : track::TrackInterrupt::kContinue;
+  });
+  f.bake(baker, pose, false);
+  baker.set_interrupt({});
+  // The rest of the whole bake's work: `tracker.max_iterations` per sub-step.
+  t.iterations_left = skinner_->setup().tracker.max_iterations * f.stats.substeps - f.stats.iterations;
+  t.unfinished = f.stats.capped_calls > 0 && t.iterations_left > 0;
+}
+
+// The rest of each unfinished edit's solve in `r`: one more tracker call at the same pose (the
+// worker; abandoned for a newer request); false when there was none or it was abandoned.
+bool ViewerModel::refine(const Request& r, std::map<Method, Frame>& frames) {
+  if (!r.clip.empty()) return false;
+  bool any = false;
+  for (const Method m : r.methods) {
+    Track& t = track_of(m);
+    if (!t.unfinished) continue;
+    t.unfinished = false;
+    FrameBaker& baker = *t.edit_baker;
+    baker.set_iteration_cap(t.iterations_left);
+    baker.set_interrupt([this] {  // a newer edit: its frame starts where this one stopped
+      return newer_request() ? track::TrackInterrupt::kAbandon : track::TrackInterrupt::kContinue;
+    });
+    Frame& f = t.edit_frame;
+    const skinning::FrameStats first = f.stats;
+    f.bake(baker, r.pose, false);
+    baker.set_interrupt({});
+    baker.set_iteration_cap(0);
+    const skinning::FrameStats rest = f.stats;
+    f.stats = first;
+    add_slice(rest, f.stats);
+    if (rest.abandoned) return false;  // the shown frame stays the first part's
+    frames[m] = f;
+    any = true;
+  }
+  return any;
+}
+
 // Bakes request `r` for each of its methods (on the thread that owns the bakers).
 std::map<Method, ViewerModel::Frame> ViewerModel::execute(const Request& r) {
   std::map<Method, Frame> out;
   long baked = 0;
   for (const Method m : r.methods) {
     Track& t = track_of(m);
-    auto bake = [&](FrameBaker& baker, const Pose& pose, Frame& f) {
-      f.positions = baker.next(pose, &f.stats);
-      f.contact = baker.contacts() ? *baker.contacts() : std::vector<std::uint8_t>{};
-      f.mask = baker.mask();
-      f.pose = pose;
-      ++baked;
-      f.measured = !options_.background;
-    };
     if (r.clip.empty()) {
       if (!t.edit_baker) t.edit_baker = std::make_unique<FrameBaker>(*skinner_, m, bake_options(options_));
-      bake(*t.edit_baker, r.pose, t.edit_frame);
+      bake_edit(t, r.pose);
+      ++baked;
       out[m] = t.edit_frame;
       continue;
     }
@@ -328,7 +407,8 @@ std::map<Method, ViewerModel::Frame> ViewerModel::execute(const Request& r) {
     }
     while (static_cast<int>(t.clip_frames.size()) <= r.frame) {
       Frame f;
-      bake(*t.clip_baker, (*r.clip_poses)[t.clip_frames.size()], f);
+      f.bake(*t.clip_baker, (*r.clip_poses)[t.clip_frames.size()], !options_.background);
+      ++baked;
       t.clip_frames.push_back(std::move(f));
     }
     out[m] = t.clip_frames[std::size_t(r.frame)];
@@ -357,16 +437,15 @@ void ViewerModel::worker_loop() {
     std::exception_ptr error;
     try {
       frames = execute(r);
+      publish(r, frames);
+      while (!newer_request() && refine(r, frames)) publish(r, frames);  // sliced edits
     } catch (...) {
       error = std::current_exception();
     }
     bool measure = false;
     {
       std::unique_lock<std::mutex> lock(mutex_);
-      if (error)
-        error_ = error;
-      else
-        finished_ = Finished{r.id, r.methods, frames};
+      if (error) error_ = error;
       measure =
           !error && !wake_.wait_for(lock, kMeasureDelay, [this] { return stop_ || waiting_.has_value(); });
       if (!measure) busy_ = false;
@@ -375,7 +454,7 @@ void ViewerModel::worker_loop() {
       try {
         for (auto& [m, f] : frames) {
           f.stats.metrics = skinner_->measure(f.pose, f.positions, options_.self_intersections,
-                                              f.contact.empty() ? nullptr : &f.contact);
+                                              f.excluded.empty() ? nullptr : &f.excluded);
           f.measured = true;
         }
       } catch (...) {
@@ -392,9 +471,17 @@ void ViewerModel::worker_loop() {
   }
 }
 
+void ViewerModel::publish(const Request& r, const std::map<Method, Frame>& frames) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    finished_ = Finished{r.id, r.methods, frames};
+  }
+  published_.notify_all();
+}
+
 bool ViewerModel::newer_request() const {
   std::lock_guard<std::mutex> lock(mutex_);
-  return waiting_.has_value();
+  return stop_ || waiting_.has_value();
 }
 
 bool ViewerModel::poll() {
@@ -412,6 +499,15 @@ bool ViewerModel::poll() {
   shown_id_ = done->id;
   overlays_.reset();
   return true;
+}
+
+bool ViewerModel::poll(double wait_ms) {
+  if (options_.background && pending() && wait_ms > 0) {
+    std::unique_lock<std::mutex> lock(mutex_);
+    published_.wait_for(lock, std::chrono::duration<double, std::milli>(wait_ms),
+                        [this] { return error_ || (finished_ && finished_->id == request_id_); });
+  }
+  return poll();
 }
 
 void ViewerModel::wait_idle() {

@@ -341,6 +341,11 @@ void track_frame(const Skinner& sk, BakeState& s, const Pose& pose, std::size_t 
     st.lost_vertices = ts.lost_vertices;
     st.oriented_vertices += ts.oriented_vertices;
     s.prev_skin = skin;
+    if (ts.abandoned) {  // the next frame starts from this sub-step
+      st.abandoned = true;
+      s.previous = ps;
+      return;
+    }
   }
   s.previous = pose;
 }
@@ -418,12 +423,11 @@ void start_bake(Skinner& sk, Method method, const BakeOptions& options, BakeStat
   }
 }
 
-/// A frame's metrics (Skinner::measure).
-FrameMetrics measure_frame(Skinner& sk, const Pose& pose, const track::Positions& pos,
-                           const BakeOptions& options, const std::vector<std::uint8_t>* contact,
-                           const track::IsoSurfaceTracker* tracker) {
-  // The iso residual leaves out the method's contact vertices and, with the tracker, the vertices
-  // it smoothed (β > 0) and its free vertices (not held to their iso-values).
+/// The vertices a frame's iso residual leaves out: the method's contact vertices and, with the
+/// tracker, the vertices it smoothed (β > 0) and its free vertices (not held to their iso-values);
+/// empty without contact flags (lbs, dqs).
+std::vector<std::uint8_t> iso_exclusions(const std::vector<std::uint8_t>* contact,
+                                         const track::IsoSurfaceTracker* tracker) {
   std::vector<std::uint8_t> excluded;
   if (contact) {
     excluded = *contact;
@@ -433,6 +437,14 @@ FrameMetrics measure_frame(Skinner& sk, const Pose& pose, const track::Positions
         excluded[v] |= fl.beta[v] > 0 || (!fl.free.empty() && fl.free[v]) ? 1 : 0;
     }
   }
+  return excluded;
+}
+
+/// A frame's metrics (Skinner::measure).
+FrameMetrics measure_frame(Skinner& sk, const Pose& pose, const track::Positions& pos,
+                           const BakeOptions& options, const std::vector<std::uint8_t>* contact,
+                           const track::IsoSurfaceTracker* tracker) {
+  const std::vector<std::uint8_t> excluded = iso_exclusions(contact, tracker);
   return sk.measure(pose, pos, options.self_intersections, contact ? &excluded : nullptr);
 }
 
@@ -467,6 +479,21 @@ track::Positions FrameBaker::next(const Pose& pose, FrameStats* stats) {
     st.metrics = measure_frame(*s_->sk, pose, pos, s_->options, s_->contact, s_->bake.tracker.get());
   if (stats) *stats = std::move(st);
   return pos;
+}
+
+void FrameBaker::set_iteration_cap(int cap) {
+  require(cap >= 0, "frame baker iteration cap", "must be >= 0 (got " + std::to_string(cap) + ")",
+          "use 0 for the setup's tracker.max_iterations");
+  if (s_->bake.tracker)
+    s_->bake.tracker->set_max_iterations(cap > 0 ? cap : s_->sk->setup().tracker.max_iterations);
+}
+
+void FrameBaker::set_interrupt(std::function<track::TrackInterrupt()> interrupt) {
+  if (s_->bake.tracker) s_->bake.tracker->set_interrupt(std::move(interrupt));
+}
+
+std::vector<std::uint8_t> FrameBaker::iso_exclusions() const {
+  return isokit::skinning::iso_exclusions(s_->contact, s_->bake.tracker.get());
 }
 
 const std::vector<std::uint8_t>* FrameBaker::contacts() const {

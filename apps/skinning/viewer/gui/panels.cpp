@@ -46,7 +46,7 @@ skinning::RenderOptions ViewState::options(const Eigen::AlignedBox3d& box, int w
   return o;
 }
 
-Panels::Panels(ViewerModel& model) : model_(model) {
+Panels::Panels(ViewerModel& model, double skin_wait_ms) : model_(model), skin_wait_ms_(skin_wait_ms) {
   for (Eigen::Index v = 0; v < model_.rig().rest.rows(); ++v)
     box_.extend(model_.rig().rest.row(v).cast<double>().transpose());
   for (const Eigen::Vector3d& p : model_.joint_positions()) box_.extend(p);
@@ -54,7 +54,7 @@ Panels::Panels(ViewerModel& model) : model_(model) {
 
 void Panels::draw(int width, int height) {
   ++frame_;
-  if (model_.poll()) dirty_ = true;
+  if (model_.poll(skin_wait_ms_)) dirty_ = true;
   if (playing_ && !model_.clip().empty()) {
     model_.set_frame(model_.frame() + 1 < model_.frame_count() ? model_.frame() + 1 : 0);
   }

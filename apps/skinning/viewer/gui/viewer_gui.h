@@ -46,7 +46,8 @@ using Texture = gui_kit::Texture;
 /// The viewer's widgets over a model; draw() builds one ImGui frame.
 class Panels {
  public:
-  explicit Panels(ViewerModel& model);
+  /// `skin_wait_ms`: ViewerGuiOptions::skin_wait_ms.
+  Panels(ViewerModel& model, double skin_wait_ms);
   void draw(int width, int height);
   const Layout& layout() const { return layout_; }
   Overlay overlay() const { return overlay_; }
@@ -72,6 +73,7 @@ class Panels {
   void handle_view_input(const ImVec2& at, const ImVec2& size);
 
   ViewerModel& model_;
+  double skin_wait_ms_;
   ViewState view_;
   Overlay overlay_{Overlay::kNone};
   Layout layout_;

@@ -38,6 +38,14 @@ namespace {
 using nlohmann::json;
 using Clock = std::chrono::steady_clock;
 
+/// The window's model options: baking in the background, an edit shown after `edit_slice_ms`.
+ViewerOptions model_options(const ViewerGuiOptions& o) {
+  ViewerOptions vo;
+  vo.background = true;
+  vo.edit_slice_ms = o.edit_slice_ms;
+  return vo;
+}
+
 skinning::Image read_framebuffer(GLFWwindow* w) {
   skinning::Image img;
   img.rgba = gui_kit::read_framebuffer(w, img.width, img.height);
@@ -230,8 +238,8 @@ json shot_state(const json& e, const skinning::Image& img, const ViewerModel& mo
 /// error for the window to show.
 class Opener {
  public:
-  Opener(std::string path, std::string setup_path, Method method)
-      : path_(std::move(path)), thread_([this, setup_path, method] { run(setup_path, method); }) {}
+  Opener(std::string path, std::string setup_path, Method method, ViewerOptions vo)
+      : path_(std::move(path)), thread_([this, setup_path, method, vo] { run(setup_path, method, vo); }) {}
   ~Opener() { thread_.join(); }
   bool done() const { return done_; }
   std::string progress() const {
@@ -244,7 +252,7 @@ class Opener {
   const std::string& path() const { return path_; }
 
  private:
-  void run(const std::string& setup_path, Method method) {
+  void run(const std::string& setup_path, Method method, const ViewerOptions& vo) {
     try {
       const skinning::SkinSetup setup =
           setup_path.empty() ? skinning::SkinSetup{} : skinning::load_setup(setup_path);
@@ -254,8 +262,6 @@ class Opener {
       };
       auto sk = std::make_shared<skinning::Skinner>(
           skinning::open_rig(path_, 30, progress, nullptr, setup.mask), setup, progress);
-      ViewerOptions vo;
-      vo.background = true;
       model_ = std::make_unique<ViewerModel>(sk, method, vo);
     } catch (const std::exception& e) {
       error_ = e.what();
@@ -283,7 +289,7 @@ void draw_opening(const Opener& opener) {
 /// The script's report: the screenshots, the drag's redraw rate and the lag of the skin shown.
 json report_of(const Player& player, const json& shots, const std::vector<double>& frame_ms,
                const std::vector<long>& requested, const std::vector<long>& shown,
-               std::vector<double> bake_ms, const gui::Panels& panels) {
+               std::vector<double> bake_ms, const json& bakes, const gui::Panels& panels) {
   std::vector<int> lag;  // per drag frame: frames since the request now shown was made
   std::vector<double> drag_ms;
   for (const int f : player.drag_frames()) {
@@ -305,7 +311,8 @@ json report_of(const Player& player, const json& shots, const std::vector<double
         {"lag_frames_max", lag.empty() ? 0 : *std::max_element(lag.begin(), lag.end())},
         {"lag_frames", lag},
         {"bake_ms_median",
-         bake_ms.empty() ? 0.0 : (std::sort(bake_ms.begin(), bake_ms.end()), bake_ms[bake_ms.size() / 2])}}},
+         bake_ms.empty() ? 0.0 : (std::sort(bake_ms.begin(), bake_ms.end()), bake_ms[bake_ms.size() / 2])},
+        {"bakes", bakes}}},
       {"frames", frame_ms.size()},
       {"message", panels.message()},
       {"gl_renderer", reinterpret_cast<const char*>(glGetString(GL_RENDERER))}};
@@ -320,9 +327,8 @@ std::unique_ptr<ViewerModel> initial_model(const ViewerGuiOptions& o) {
   };
   auto skinner = std::make_shared<skinning::Skinner>(
       skinning::open_rig(o.rig, 30, progress, nullptr, setup.mask), setup, progress);
-  ViewerOptions vo;
-  vo.background = true;
-  auto model = std::make_unique<ViewerModel>(skinner, skinning::method_from_string(o.method), vo);
+  auto model =
+      std::make_unique<ViewerModel>(skinner, skinning::method_from_string(o.method), model_options(o));
   if (!o.clip.empty()) model->play_clip(o.clip), model->wait_idle();
   return model;
 }
@@ -339,12 +345,13 @@ int run_viewer(const ViewerGuiOptions& o) {
   GLFWwindow* window = gui_kit::open_window("isokit-skin view", "isokit skinning viewer", o.width, o.height,
                                             !o.script_path.empty(), true);
   gui_kit::ImGuiSession imgui(window);
-  auto panels = std::make_unique<gui::Panels>(*model);
+  auto panels = std::make_unique<gui::Panels>(*model, o.skin_wait_ms);
   std::unique_ptr<Opener> opener;
   json shots = json::array();
   std::vector<double> frame_ms;
   std::vector<long> requested, shown;
   std::vector<double> bake_ms;  // the deformation time of each new frame shown
+  json bakes = json::array();   // and its tracker work: [ms, sub-steps, iterations, capped calls]
   while (!glfwWindowShouldClose(window) && !(player && player->done())) {
     const auto t0 = Clock::now();
     glfwPollEvents();
@@ -356,7 +363,7 @@ int run_viewer(const ViewerGuiOptions& o) {
     glfwGetFramebufferSize(window, &fw, &fh);
     panels->draw(fw, fh);
     if (auto path = panels->take_open_request(); path && !opener)
-      opener = std::make_unique<Opener>(*path, o.setup, model->method());
+      opener = std::make_unique<Opener>(*path, o.setup, model->method(), model_options(o));
     if (opener) draw_opening(*opener);
     ImGui::Render();
     glViewport(0, 0, fw, fh);
@@ -375,13 +382,17 @@ int run_viewer(const ViewerGuiOptions& o) {
       if (opener->model()) {
         panels.reset();
         model = std::move(opener->model());
-        panels = std::make_unique<gui::Panels>(*model);
+        panels = std::make_unique<gui::Panels>(*model, o.skin_wait_ms);
       } else {
         panels->set_message(opener->error());  // names the file
       }
       opener.reset();
     }
-    if (shown.empty() || model->shown_id() != shown.back()) bake_ms.push_back(model->stats().ms);
+    if (shown.empty() || model->shown_id() != shown.back()) {
+      const skinning::FrameStats& st = model->stats();
+      bake_ms.push_back(st.ms);
+      bakes.push_back({st.ms, st.substeps, st.iterations, st.capped_calls});
+    }
     requested.push_back(model->request_id());
     shown.push_back(model->shown_id());
     frame_ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
@@ -389,7 +400,7 @@ int run_viewer(const ViewerGuiOptions& o) {
   if (player) {
     const std::string path = o.report_path.empty() ? o.screenshot_dir + "/viewer-report.json" : o.report_path;
     write_text_file_atomically(
-        path, report_of(*player, shots, frame_ms, requested, shown, bake_ms, *panels).dump(1) + "\n");
+        path, report_of(*player, shots, frame_ms, requested, shown, bake_ms, bakes, *panels).dump(1) + "\n");
     for (const std::string& f : player->failures)
       std::fprintf(stderr, "isokit-skin view: script: %s\n", f.c_str());
   }

@@ -31,6 +31,9 @@ using FieldFunction = std::function<void(const Vec3f* points, std::size_t n, flo
 std::vector<float> sample_iso_values(const FieldFunction& field, const Positions& positions);
 
 /// What a tracking or projection call did.
+/// What IsoSurfaceTracker::set_interrupt's test asks of the call in progress.
+enum class TrackInterrupt { kContinue, kStop, kAbandon };
+
 struct TrackStats {
   int iterations{0};  ///< relaxation iterations (2014: Jacobi + Newton; 2013: Newton steps)
   /// Vertex updates of the relaxation (2014 tracker: the sum of the active-set sizes over its
@@ -48,7 +51,12 @@ struct TrackStats {
   /// smaller of the largest move the last solve asked for and the last iteration's largest move;
   /// 0 for the other solvers)
   float tangential_residual{0};
-  bool converged{false};   ///< the convergence test of TrackerOptions::tolerance held before the cap
+  bool converged{false};  ///< the convergence test of TrackerOptions::tolerance held before the cap
+  bool interrupted{
+      false};  ///< the relaxation stopped early at the caller's request (IsoSurfaceTracker::set_interrupt)
+  /// The call was abandoned (TrackInterrupt::kAbandon): the positions are where the relaxation
+  /// stopped, the closing stages did not run, flags and residual statistics are not this call's.
+  bool abandoned{false};
   float max_move{0};       ///< largest vertex move in the last iteration
   float max_residual{0};   ///< max |f(v) - iso_v| over vertices outside the smoothed contact region, not free
   float mean_residual{0};  ///< mean of the same

@@ -34,6 +34,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -75,6 +76,20 @@ class IsoSurfaceTracker {
   /// relaxed, smoothed nor repaired, while its neighbours see it where it is.
   /// \throw InputError for a wrong size or a value outside [0, 1].
   void set_anchor_stiffness(std::vector<float> stiffness);
+
+  /// Changes TrackerOptions::max_iterations for the next calls (count, ≥ 0): a live preview
+  /// spends a bounded time per call and continues the solve by calling again at the same pose.
+  /// \throw InputError for a negative count.
+  void set_max_iterations(int iterations);
+
+  /// A test run before each relaxation iteration of the next calls (empty, the default: none),
+  /// for a live preview that bounds its time per call: kStop ends the relaxation as the iteration
+  /// cap does (TrackStats::converged false, TrackStats::interrupted true) and the call runs its
+  /// closing stages (a frame to show, whose solve another call at the same pose may continue);
+  /// kAbandon returns at once with the positions where the relaxation stopped, for a caller that
+  /// will track them to a newer pose (TrackStats::abandoned; the flags stay the last finished
+  /// call's).
+  void set_interrupt(std::function<TrackInterrupt()> interrupt);
 
   /// Vertices the fold and orientation repairs may move (1) or must leave in place (0); empty (the
   /// default): all.

@@ -12,6 +12,7 @@
 /// geometric metrics (metrics.h, docs/QUALITY.md).
 #pragma once
 
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -60,6 +61,9 @@ struct FrameStats {
   /// (`TrackStats::converged` false: `TrackerOptions::max_iterations`,
   /// `ProjectorOptions::max_iterations`).
   int capped_calls{0};
+  /// The frame was abandoned for a newer pose (FrameBaker::set_interrupt): its positions are a
+  /// starting guess at the sub-step reached, not a result.
+  bool abandoned{false};
   /// The iterations of each of those calls (TrackStats::iterations), in call order.
   std::vector<int> call_iterations;
   FrameMetrics metrics;  ///< all quality metrics (field ones with the 2014 tree)
@@ -99,8 +103,21 @@ class FrameBaker {
   /// `stats` receives the frame's statistics and, with BakeOptions::metrics, its metrics.
   /// \throw InputError for a pose with the wrong joint count.
   track::Positions next(const Pose& pose, FrameStats* stats = nullptr);
+  /// Caps the tracker's iterations per call of the next frames (tracking2014; count, ≥ 1; 0 = the
+  /// setup's `tracker.max_iterations`, the default). \throw InputError for a negative cap.
+  void set_iteration_cap(int cap);
+  /// The tracker's interrupt for the next frames (tracking2014; IsoSurfaceTracker::set_interrupt;
+  /// empty, the default: none): a live preview bounds its time per frame (kStop) and continues
+  /// the solve with `next` at the same pose, or drops a frame for a newer pose (kAbandon: the
+  /// frame ends at the sub-step where it was abandoned, FrameStats::abandoned; the next frame
+  /// starts there). Frames cut short differ from `bake`'s.
+  void set_interrupt(std::function<track::TrackInterrupt()> interrupt);
   /// The method's contact flags of the last frame (implicit methods), else null.
   const std::vector<std::uint8_t>* contacts() const;
+  /// The vertices the last frame's iso residual leaves out (contact, smoothed and free vertices;
+  /// empty for lbs and dqs): `Skinner::measure(pose, positions, ..., &this)` of a frame measured
+  /// later equals the metrics of `next` with BakeOptions::metrics.
+  std::vector<std::uint8_t> iso_exclusions() const;
   /// The relaxation mask per vertex in use (empty: every vertex tracked; lbs and dqs: empty).
   const std::vector<float>& mask() const;
   Method method() const;

@@ -10,6 +10,8 @@
 
 #include <string>
 
+#include "isokit/viewer/model.h"
+
 namespace isokit::viewer {
 
 struct ViewerGuiOptions {
@@ -18,6 +20,12 @@ struct ViewerGuiOptions {
   std::string setup;                   ///< a setup file ("" = the defaults)
   std::string method{"tracking2014"};  ///< lbs | dqs | implicit2013 | tracking2014
   int width{1280}, height{800};        ///< window size in pixels
+  /// ViewerOptions::edit_slice_ms: an edit's skin shown after this many ms of its solve (0 = whole).
+  double edit_slice_ms{ViewerOptions{}.edit_slice_ms};
+  /// Each drawn frame waits up to this long for the skin of the last edit when it is not shown
+  /// yet (ms; default 5; 0 = never wait): a few ms of the frame for a skin closer to the sliders
+  /// (ViewerModel::poll(double)).
+  double skin_wait_ms{5.0};
   /// Headless mode: a JSON script of input events (gui.cpp's file comment); the window closes
   /// after its last event and writes `report_path` (default `screenshot_dir/viewer-report.json`).
   std::string script_path;

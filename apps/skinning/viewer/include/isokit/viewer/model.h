@@ -20,7 +20,9 @@
 /// it, one worker thread bakes: an edit or a frame change posts a request (a newer one replaces
 /// a request not yet started: a slider drag faster than the tracker skips poses, the tracker then
 /// sub-steps over the jump), and `poll()` (once per drawn frame) publishes what the worker
-/// finished; until then the queries show the last finished frame (`pending()`). The worker alone
+/// finished; until then the queries show the last finished frame (`pending()`). An edited pose is
+/// shown after a short first part of its solve (`ViewerOptions::edit_slice_ms`) and again when the
+/// rest is done: the skin follows a drag at once and settles when the pose rests. The worker alone
 /// uses the skinner and the bakers (nothing else may use that skinner while the model lives, but
 /// between `wait_idle()` and the next request); the 2014 field, which the overlays read, is built
 /// before it starts.
@@ -51,6 +53,12 @@ struct ViewerOptions {
   std::size_t grain{1024};  ///< parallel grain of the bakes (0 = serial, same results)
   /// Bake on a worker thread (see the file comment); the window sets it. Default false.
   bool background{false};
+  /// In the background, the tracking2014 frame of an edit is shown after at most this long (ms,
+  /// wall clock; default 3; 0 = whole, one call as `bake`): the tracker's relaxation is cut short
+  /// then (or at once by a newer edit), the frame published, and the rest of the whole bake's
+  /// iterations run at the same pose in a second call, published too, unless a newer edit comes
+  /// first. Clips are baked whole (their frames equal `bake`'s).
+  double edit_slice_ms{3.0};
 };
 
 /// Per-vertex and per-triangle flags of the shown frame, for the overlays.
@@ -148,6 +156,9 @@ class ViewerModel {
   // ---- Background baking (ViewerOptions::background).
   /// Publishes the frames the worker finished; true when the shown frame changed.
   bool poll();
+  /// As poll(), after waiting up to `wait_ms` (ms) for the frame of the last request when it is
+  /// not shown yet: a window trades a little of its frame rate for a skin closer to the sliders.
+  bool poll(double wait_ms);
   /// True while the shown frame is older than the last request.
   bool pending() const { return shown_id_ != request_id_; }
   /// The last request's number and that of the shown frame (each edit or frame change is one).
@@ -161,9 +172,12 @@ class ViewerModel {
     track::Positions positions;
     skinning::FrameStats stats;
     std::vector<std::uint8_t> contact;
+    std::vector<std::uint8_t> excluded;  ///< FrameBaker::iso_exclusions, for metrics measured later
     std::vector<float> mask;
     Pose pose;            ///< the pose it was baked at
     bool measured{true};  ///< stats.metrics computed (in the background: skipped while newer requests wait)
+    /// The baker's next frame at `pose` (positions, stats and flags).
+    void bake(skinning::FrameBaker& baker, const Pose& at, bool with_metrics);
   };
   /// What the shown state needs baked: the edited pose, or a clip frame, for some methods.
   struct Request {
@@ -179,8 +193,11 @@ class ViewerModel {
   const Frame& shown(Method m) const;
   void refresh();
   std::map<Method, Frame> execute(const Request& r);
+  bool refine(const Request& r, std::map<Method, Frame>& frames);
+  void bake_edit(Track& t, const Pose& pose);
+  void publish(const Request& r, const std::map<Method, Frame>& frames);
   void worker_loop();
-  bool newer_request() const;
+  bool newer_request() const;  ///< a request waits, or the model is closing
   void push_undo();
   Pose pose_of(const std::vector<std::array<double, 3>>& angles) const;
 
@@ -204,7 +221,7 @@ class ViewerModel {
   std::shared_ptr<const std::vector<Pose>> clip_shared_;  ///< clip_poses_, for the requests
   // Worker (background): the request waiting, the results finished, the counters.
   mutable std::mutex mutex_;
-  std::condition_variable wake_, idle_;
+  std::condition_variable wake_, idle_, published_;
   std::optional<Request> waiting_;
   struct Finished {
     long id;
