@@ -9,6 +9,7 @@
 
 #include "isokit/core/error.h"
 #include "isokit/implicit/evaluators.h"
+#include "isokit/implicit/fit.h"
 #include "isokit/implicit/primitives.h"
 #include "isokit/implicit/skeleton.h"
 #include "isokit/operators/biharmonic.h"
@@ -16,6 +17,7 @@
 #include "isokit/operators/grid_operator.h"
 #include "isokit/skinning/deform.h"
 #include "isokit/skinning/grid_operators.h"
+#include "isokit/skinning/rigid_pieces.h"
 #include "isokit/track/mesh.h"
 
 namespace isokit::skinning {
@@ -136,6 +138,7 @@ SkinField::Skeleton SkinField::compressed_skeleton(const SkinSetup& setup, const
   }
   hang_roots_under_first(sk.parts.parent);
   add_muscles(setup, index, progress, sk);
+  if (setup.rigid_pieces && setup.piece_fields) add_pieces(setup, index, progress, sk);
   return sk;
 }
 
@@ -184,6 +187,66 @@ void SkinField::add_muscles(const SkinSetup& setup, const std::vector<int>& inde
   }
 }
 
+/// Each rigid piece as one more part: the distance field of its own mesh, under its bone's part
+/// (the nearest fitted ancestor's), joined by union.
+void SkinField::add_pieces(const SkinSetup& setup, const std::vector<int>& index, const Progress& progress,
+                           Skeleton& sk) {
+  const Rig& r = fitted_->rig();
+  std::shared_ptr<const operators::GridOperator> blend_grid;
+  std::vector<int> piece_of(static_cast<std::size_t>(r.rest.rows()), -1);
+  const std::vector<RigidPiece> pieces = find_rigid_pieces(r);
+  for (std::size_t k = 0; k < pieces.size(); ++k)
+    for (int v : pieces[k].vertices) piece_of[std::size_t(v)] = int(k);
+  for (std::size_t k = 0; k < pieces.size(); ++k) {
+    const RigidPiece& pc = pieces[k];
+    const int bone =
+        pc.joints[std::size_t(std::max_element(pc.weights.begin(), pc.weights.end()) - pc.weights.begin())];
+    int owner = bone;
+    while (owner >= 0 && index[std::size_t(owner)] < 0) owner = r.joints[std::size_t(owner)].parent;
+    if (owner < 0) continue;  // no fitted part to hang it under
+    implicit::MeshPart part;
+    part.name = r.name + ": rigid piece " + std::to_string(k);
+    std::vector<int> local(static_cast<std::size_t>(r.rest.rows()), -1);
+    Eigen::Vector3d lo = Eigen::Vector3d::Constant(INFINITY), hi = -lo;
+    for (int v : pc.vertices) {
+      local[std::size_t(v)] = int(part.vertices.size());
+      const Eigen::Vector3d q = r.rest.row(v).cast<double>().transpose();
+      part.vertices.push_back(Vec3d{q.x(), q.y(), q.z()});
+      lo = lo.cwiseMin(q), hi = hi.cwiseMax(q);
+    }
+    for (Eigen::Index t = 0; t < r.triangles.rows(); ++t)
+      if (piece_of[std::size_t(r.triangles(t, 0))] == int(k))
+        part.triangles.push_back({local[std::size_t(r.triangles(t, 0))],
+                                  local[std::size_t(r.triangles(t, 1))],
+                                  local[std::size_t(r.triangles(t, 2))]});
+    Eigen::Vector3d axis = Eigen::Vector3d::Zero();
+    Eigen::Index longest = 0;
+    (hi - lo).maxCoeff(&longest);
+    axis[longest] = 0.5 * (hi - lo)[longest];
+    const Eigen::Vector3d c = 0.5 * (lo + hi);
+    part.bone_start = Vec3d{(c - axis).x(), (c - axis).y(), (c - axis).z()};
+    part.bone_end = Vec3d{(c + axis).x(), (c + axis).y(), (c + axis).z()};
+    implicit::PartFitOptions fo = setup.fit;
+    fo.field = implicit::PartFitOptions::FieldKind::distance;
+    implicit::FittedPart fit;
+    try {
+      fit = implicit::fit_part_distance(part, fo);
+    } catch (const InputError&) {
+      continue;  // a piece whose mesh gives no distance field keeps its bone's field only
+    }
+    const Affine rest = to_affine(fit.local_to_world);
+    pieces_.push_back({static_cast<int>(sk.parts.parent.size()), bone, rest});
+    sk.parts.parent.push_back(index[std::size_t(owner)]);
+    sk.parts.parts.push_back(fit.field());
+    sk.parts.transforms.push_back(to_rigid3f(rest));
+    operators::Controller unused = operators::Controller::preset(setup.bulge_controller);
+    sk.joints.push_back(
+        joint_setup(part.name, JointOperator::kUnion, setup, kind_, progress, unused, blend_grid));
+    joint_ops_.push_back("rigid piece " + std::to_string(k) + " on " + r.joints[std::size_t(bone)].name +
+                         ": union");
+  }
+}
+
 /// Each muscle moved rigidly with its bone and scaled by its driver's bend (MuscleSetup::curve).
 void SkinField::pose_muscles(const std::vector<Affine>& skin, implicit::Pose& pose) const {
   for (const MuscleLeaf& m : muscles_) {
@@ -229,6 +292,8 @@ std::shared_ptr<const implicit::Pose> SkinField::pose_of(const std::vector<Affin
                            leaf_scale(skin[b.joint], leaf));
   }
   pose_muscles(skin, *pose);
+  for (const PieceLeaf& pc : pieces_)
+    pose->set_transform_of(*program_, pc.id, to_rigid3f(skin[std::size_t(pc.bone)] * pc.rest));
   for (const BulgeGate& g : gates_) {
     // The bend: the rotation angle between the two joints' skinning rotations (0 at rest).
     const float cap = static_cast<float>(

@@ -345,6 +345,7 @@ void read_tracker_repairs(const json& t, const std::string& w, SkinSetup& s) {
 /// Section `tracker`, the keys of what is not tracked: rigid pieces and small parts.
 void read_tracker_rigid(const json& t, const std::string& w, SkinSetup& s) {
   read(t, "rigid_pieces", s.rigid_pieces, w);
+  read(t, "piece_fields", s.piece_fields, w);
   read(t, "small_part_mask", s.small_part_mask, w);
   require(s.small_part_mask >= 0.f && s.small_part_mask <= 1.f, w + ".small_part_mask",
           "must be in [0, 1] (got " + format_number(s.small_part_mask) + ")",
@@ -377,6 +378,7 @@ void read_tracker(const json& t, const std::string& w, SkinSetup& s) {
               "orientation_repair_max_outward_move",
               "axis_guard",
               "rigid_pieces",
+              "piece_fields",
               "chebyshev_rho",
               "active_set",
               "min_contact_damping",

@@ -193,6 +193,11 @@ struct SkinSetup {
   /// preset turns it off). Default on (docs/decisions/rigid-pieces-on-by-default.md: 66 → 77
   /// criterion checks on `make eval`); setup key `tracker.rigid_pieces`.
   bool rigid_pieces{true};
+  /// Each rigid piece (above) also has a field of its own in the composition: the distance field
+  /// of its closed mesh (libimplicit `fit_part_distance`), carried by its bone and joined to that
+  /// bone's part by union, so the skin meets the piece's exact shape. Setup key
+  /// `tracker.piece_fields`; default false.
+  bool piece_fields{false};
   /// tracking2014: the fold repair (TrackerOptions::fold_repair) leaves alone the vertices of
   /// parts with fewer vertices than this, ≥ 0 (0: no limit): a fold repair region holds 20 – 30
   /// vertices, so smaller parts are under-resolved and smoothing would erase them. Not in the

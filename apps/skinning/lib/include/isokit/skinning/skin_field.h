@@ -69,11 +69,19 @@ class SkinField {
     Affine rest;                      ///< unit-sphere frame -> rest space (rotation + centre)
     MuscleSetup setup;
   };
+  /// A rigid piece's leaf (SkinSetup::piece_fields): its distance field, carried by `bone`.
+  struct PieceLeaf {
+    int id;       ///< leaf id in the program
+    int bone;     ///< rig joint (skinning-matrix index): the piece's largest influence
+    Affine rest;  ///< the field's frame -> rest space
+  };
   struct Skeleton;
   Skeleton compressed_skeleton(const SkinSetup& setup, const Progress& progress);
   void add_muscles(const SkinSetup& setup, const std::vector<int>& index, const Progress& progress,
                    Skeleton& sk);
   void pose_muscles(const std::vector<Affine>& skin, implicit::Pose& pose) const;
+  void add_pieces(const SkinSetup& setup, const std::vector<int>& index, const Progress& progress,
+                  Skeleton& sk);
   void find_bulge_gates();
 
   const FittedRig* fitted_;
@@ -84,6 +92,7 @@ class SkinField {
   std::vector<std::string> joint_ops_;
   std::vector<BulgeGate> gates_;
   std::vector<MuscleLeaf> muscles_;
+  std::vector<PieceLeaf> pieces_;
   /// Per leaf id: the controller of the joint's grid operator (the bulge preset for other joints).
   std::vector<operators::Controller> leaf_controllers_;
 };
