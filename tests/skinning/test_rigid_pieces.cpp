@@ -292,9 +292,10 @@ TEST_CASE(
   const BakeResult trk = pieced.bake(Method::kTracking2014, sc.poses, sc.quick);
   sc.check_block_rigid(trk);
   // The field now holds the forearm out of the block, once the contact stages let it: without the
-  // angle and fold contacts and the contact smoothing, few forearm vertices end inside (8 when
-  // measured, against 28 under DQS); with them (the defaults) the vertices of triangles turned
-  // against the block's gradient are taken for contacts and left inside (36 when measured).
+  // angle and fold contacts and the contact smoothing, few forearm vertices end inside (7 when
+  // measured, against 28 under DQS; the skin folds around the block then); with them (the
+  // defaults) the vertices turned against the block's gradient are taken for contacts and left
+  // inside (36 when measured).
   SkinSetup bare_tracker = with;
   bare_tracker.tracker.angle_contacts = false;
   bare_tracker.tracker.fold_contacts = false;
