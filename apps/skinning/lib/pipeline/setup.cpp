@@ -354,7 +354,8 @@ void read_tracker_rigid(const json& t, const std::string& w, SkinSetup& s) {
   require(s.small_part_vertices >= 0, w + ".small_part_vertices", "must be >= 0", "use e.g. 100");
 }
 
-void read_tracker(const json& t, const std::string& w, SkinSetup& s) {
+/// The keys section `tracker` may hold.
+void check_tracker_keys(const json& t, const std::string& w) {
   check_keys(t,
              {"max_iterations",
               "tolerance",
@@ -388,6 +389,10 @@ void read_tracker(const json& t, const std::string& w, SkinSetup& s) {
               "iso_tolerance",
               "global_regularization"},
              w);
+}
+
+void read_tracker(const json& t, const std::string& w, SkinSetup& s) {
+  check_tracker_keys(t, w);
   if (t.contains("relaxation")) {
     std::string relaxation;
     read(t, "relaxation", relaxation, w);
