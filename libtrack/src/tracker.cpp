@@ -183,36 +183,29 @@ void IsoSurfaceTracker::set_rest_field(const FieldFunction& rest_field) {
 
 namespace {
 
-// The call's results back to the model and the caller: the inverted flags for the next call's
-// fold test, positions (a non-finite one replaced by the caller's input) and flags in the
-// caller's order.
-void finish(detail::TrackState& s, detail::TrackerModel& m, Positions& positions) {
-  m.last_inverted = std::move(s.inverted);
-  std::vector<Vec3f>& cur = s.cur;
-  for (std::size_t i = 0; i < s.n; ++i)
-    if (!detail::finite(cur[i])) cur[i] = detail::row(positions, static_cast<Eigen::Index>(m.caller(i)));
-  m.flags = std::move(s.flags);
-  if (!m.order.empty()) {
-    cur = detail::permuted(cur, m.rank);
-    m.flags.contact = detail::permuted(m.flags.contact, m.rank);
-    m.flags.lost = detail::permuted(m.flags.lost, m.rank);
-    m.flags.beta = detail::permuted(m.flags.beta, m.rank);
-    m.flags.free = detail::permuted(m.flags.free, m.rank);
-  }
-  detail::from_points(cur, positions);
-}
-
-/// An abandoned call (TrackInterrupt::kAbandon): the positions where the relaxation stopped, the
-/// last finished call's flags kept.
-TrackStats abandon(detail::TrackState& s, const detail::TrackerModel& m, Positions& positions,
-                   std::chrono::steady_clock::time_point t0) {
+// The call's positions back to the caller: a non-finite one replaced by the caller's input, in
+// the caller's order.
+void write_positions(detail::TrackState& s, const detail::TrackerModel& m, Positions& positions) {
   std::vector<Vec3f>& cur = s.cur;
   for (std::size_t i = 0; i < s.n; ++i)
     if (!detail::finite(cur[i])) cur[i] = detail::row(positions, static_cast<Eigen::Index>(m.caller(i)));
   if (!m.order.empty()) cur = detail::permuted(cur, m.rank);
   detail::from_points(cur, positions);
-  s.stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  return s.stats;
+}
+
+// A finished call's results back to the model and the caller: the inverted flags for the next
+// call's fold test, the positions and the flags in the caller's order. (An abandoned call,
+// TrackInterrupt::kAbandon, writes its positions only: the flags stay the last finished call's.)
+void finish(detail::TrackState& s, detail::TrackerModel& m, Positions& positions) {
+  m.last_inverted = std::move(s.inverted);
+  m.flags = std::move(s.flags);
+  if (!m.order.empty()) {
+    m.flags.contact = detail::permuted(m.flags.contact, m.rank);
+    m.flags.lost = detail::permuted(m.flags.lost, m.rank);
+    m.flags.beta = detail::permuted(m.flags.beta, m.rank);
+    m.flags.free = detail::permuted(m.flags.free, m.rank);
+  }
+  write_positions(s, m, positions);
 }
 
 }  // namespace
@@ -252,14 +245,16 @@ TrackStats IsoSurfaceTracker::track(const FieldFunction& field, const std::vecto
         s.cg ? detail::cg_relaxation(s) : detail::jacobi_relaxation();
     detail::relax(s, *strategy);  // 2. tangential ARAP relaxation + Newton (2014 §5 stage 3, §5.2)
   }
-  if (s.stats.abandoned) return abandon(s, m, positions, t0);
-  detail::mark_contacts(s);    // 3. contacts: field flags, angle rule (2013 §5), folds
-  detail::smooth_contacts(s);  // 4. β-diffused Laplacian smoothing (2013 §5 eq. 7)
-  detail::repair_folds(s);     // 5. fold repair (not in the papers)
-  detail::collect_statistics(s);
-  detail::repair_orientation(s);  // 6. orientation repair (not in the papers)
-
-  finish(s, m, positions);
+  if (s.stats.abandoned) {  // the caller tracks these positions to a newer pose next
+    write_positions(s, m, positions);
+  } else {
+    detail::mark_contacts(s);    // 3. contacts: field flags, angle rule (2013 §5), folds
+    detail::smooth_contacts(s);  // 4. β-diffused Laplacian smoothing (2013 §5 eq. 7)
+    detail::repair_folds(s);     // 5. fold repair (not in the papers)
+    detail::collect_statistics(s);
+    detail::repair_orientation(s);  // 6. orientation repair (not in the papers)
+    finish(s, m, positions);
+  }
   s.stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return s.stats;
 }

@@ -45,6 +45,13 @@ def ball(radius, width=0.5):
     return f
 
 
+def turns_about_z(count, angle=0.3):
+    """`count` copies of the rotation by `angle` radians about z: targets that slide a sphere round."""
+    c, s = np.cos(angle), np.sin(angle)
+    rz = np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]], np.float32)
+    return np.repeat(rz[None], count, axis=0)
+
+
 def test_a_numpy_field_is_tracked_from_one_thread_with_whole_batches():
     rest, tris = uv_sphere()
     iso = tracker.sample_iso_values(ball(1.0), rest)
@@ -123,9 +130,7 @@ def test_the_mask_holds_masked_vertices_in_their_tangent_plane_and_applies_per_c
     rest, tris = uv_sphere()
     t = tracker.Tracker(rest, tris, np.full(len(rest), 0.5, np.float32))
     # Rotations that would slide every vertex around z; mask 0 keeps the tangential moves off.
-    a = 0.3
-    rz = np.array([[np.cos(a), -np.sin(a), 0], [np.sin(a), np.cos(a), 0], [0, 0, 1]], np.float32)
-    rotations = np.repeat(rz[None], len(rest), axis=0)
+    rotations = turns_about_z(len(rest))
     still, _ = t.track(ball(1.0), rest, rotations=rotations, mask=np.zeros(len(rest)))
     assert np.abs(still - rest).max() < 1e-4  # on the iso-surface already, nothing to do
     moved, _ = t.track(ball(1.0), rest, rotations=rotations)  # no mask this call: they slide round z
@@ -139,9 +144,7 @@ def test_the_mask_holds_masked_vertices_in_their_tangent_plane_and_applies_per_c
 def test_anchors_pull_vertices_and_pin_them_at_stiffness_one():
     rest, tris = uv_sphere()
     t = tracker.Tracker(rest, tris, np.full(len(rest), 0.5, np.float32))
-    a = 0.3
-    rz = np.array([[np.cos(a), -np.sin(a), 0], [np.sin(a), np.cos(a), 0], [0, 0, 1]], np.float32)
-    rotations = np.repeat(rz[None], len(rest), axis=0)
+    rotations = turns_about_z(len(rest))
     free, _ = t.track(ball(1.0), rest, rotations=rotations)
     # Pinned (stiffness 1) at anchors that are the rest positions: the top cap stays exactly put
     # while the rest slides round z.

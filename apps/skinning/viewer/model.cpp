@@ -177,24 +177,23 @@ void ViewerModel::reset_pose() {
   refresh();
 }
 
-void ViewerModel::undo() {
-  if (undo_.empty()) return;
+// Undo and redo: the last pose of `from` becomes the edited one, the edited one goes to `to`.
+void ViewerModel::step_history(History& from, History& to) {
+  if (from.empty()) return;
   end_drag();
   clip_.clear();
-  redo_.push_back(angles_);
-  angles_ = undo_.back();
-  undo_.pop_back();
+  to.push_back(angles_);
+  angles_ = from.back();
+  from.pop_back();
   refresh();
 }
 
+void ViewerModel::undo() {
+  step_history(undo_, redo_);
+}
+
 void ViewerModel::redo() {
-  if (redo_.empty()) return;
-  end_drag();
-  clip_.clear();
-  undo_.push_back(angles_);
-  angles_ = redo_.back();
-  redo_.pop_back();
-  refresh();
+  step_history(redo_, undo_);
 }
 
 void ViewerModel::save_pose_script(const std::string& path) const {

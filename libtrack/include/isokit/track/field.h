@@ -30,10 +30,10 @@ using FieldFunction = std::function<void(const Vec3f* points, std::size_t n, flo
 /// \throw InputError if a position is not finite or the field returns a non-finite value.
 std::vector<float> sample_iso_values(const FieldFunction& field, const Positions& positions);
 
-/// What a tracking or projection call did.
 /// What IsoSurfaceTracker::set_interrupt's test asks of the call in progress.
 enum class TrackInterrupt { kContinue, kStop, kAbandon };
 
+/// What a tracking or projection call did.
 struct TrackStats {
   int iterations{0};  ///< relaxation iterations (2014: Jacobi + Newton; 2013: Newton steps)
   /// Vertex updates of the relaxation (2014 tracker: the sum of the active-set sizes over its
@@ -52,8 +52,8 @@ struct TrackStats {
   /// 0 for the other solvers)
   float tangential_residual{0};
   bool converged{false};  ///< the convergence test of TrackerOptions::tolerance held before the cap
-  bool interrupted{
-      false};  ///< the relaxation stopped early at the caller's request (IsoSurfaceTracker::set_interrupt)
+  /// The relaxation stopped early at the caller's request (IsoSurfaceTracker::set_interrupt).
+  bool interrupted{false};
   /// The call was abandoned (TrackInterrupt::kAbandon): the positions are where the relaxation
   /// stopped, the closing stages did not run, flags and residual statistics are not this call's.
   bool abandoned{false};

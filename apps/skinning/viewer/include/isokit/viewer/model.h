@@ -168,6 +168,7 @@ class ViewerModel {
   void wait_idle();
 
  private:
+  using History = std::vector<std::vector<std::array<double, 3>>>;  ///< edited poses (angles per joint)
   struct Frame {
     track::Positions positions;
     skinning::FrameStats stats;
@@ -199,6 +200,7 @@ class ViewerModel {
   void worker_loop();
   bool newer_request() const;  ///< a request waits, or the model is closing
   void push_undo();
+  void step_history(History& from, History& to);
   Pose pose_of(const std::vector<std::array<double, 3>>& angles) const;
 
   std::shared_ptr<skinning::Skinner> skinner_;
@@ -207,7 +209,7 @@ class ViewerModel {
   std::optional<Method> compare_;
   int selected_{-1};
   std::vector<std::array<double, 3>> angles_;  ///< per joint, the edited pose
-  std::vector<std::vector<std::array<double, 3>>> undo_, redo_;
+  History undo_, redo_;
   bool dragging_{false};
   bool drag_changed_{false};
   std::string clip_;
