@@ -234,6 +234,17 @@ json shot_state(const json& e, const skinning::Image& img, const ViewerModel& mo
           {"view", {view.x, view.y, view.z, view.w}}};
 }
 
+/// A model of the rig at `path` with the setup at `setup_path` ("" = the defaults): read and fitted,
+/// with the stages reported to `progress`. \throw InputError naming the file.
+std::unique_ptr<ViewerModel> open_model(const std::string& path, const std::string& setup_path, Method method,
+                                        const ViewerOptions& vo, const skinning::Progress& progress) {
+  const skinning::SkinSetup setup =
+      setup_path.empty() ? skinning::SkinSetup{} : skinning::load_setup(setup_path);
+  auto sk = std::make_shared<skinning::Skinner>(skinning::open_rig(path, 30, progress, nullptr, setup.mask),
+                                                setup, progress);
+  return std::make_unique<ViewerModel>(sk, method, vo);
+}
+
 /// A rig opened from the window: read and fitted on its own thread, with its progress and its
 /// error for the window to show.
 class Opener {
@@ -254,15 +265,11 @@ class Opener {
  private:
   void run(const std::string& setup_path, Method method, const ViewerOptions& vo) {
     try {
-      const skinning::SkinSetup setup =
-          setup_path.empty() ? skinning::SkinSetup{} : skinning::load_setup(setup_path);
-      const skinning::Progress progress = [this](const std::string& stage, int done, int total) {
-        std::lock_guard<std::mutex> lock(mutex_);
-        stage_ = stage + " " + std::to_string(done) + " / " + std::to_string(total);
-      };
-      auto sk = std::make_shared<skinning::Skinner>(
-          skinning::open_rig(path_, 30, progress, nullptr, setup.mask), setup, progress);
-      model_ = std::make_unique<ViewerModel>(sk, method, vo);
+      model_ =
+          open_model(path_, setup_path, method, vo, [this](const std::string& stage, int done, int total) {
+            std::lock_guard<std::mutex> lock(mutex_);
+            stage_ = stage + " " + std::to_string(done) + " / " + std::to_string(total);
+          });
     } catch (const std::exception& e) {
       error_ = e.what();
     }
@@ -288,8 +295,8 @@ void draw_opening(const Opener& opener) {
 
 /// The script's report: the screenshots, the drag's redraw rate and the lag of the skin shown.
 json report_of(const Player& player, const json& shots, const std::vector<double>& frame_ms,
-               const std::vector<long>& requested, const std::vector<long>& shown,
-               std::vector<double> bake_ms, const json& bakes, const gui::Panels& panels) {
+               const std::vector<long>& requested, const std::vector<long>& shown, const json& bakes,
+               const gui::Panels& panels) {
   std::vector<int> lag;  // per drag frame: frames since the request now shown was made
   std::vector<double> drag_ms;
   for (const int f : player.drag_frames()) {
@@ -301,34 +308,31 @@ json report_of(const Player& player, const json& shots, const std::vector<double
   }
   std::sort(drag_ms.begin(), drag_ms.end());
   const double median = drag_ms.empty() ? 0.0 : drag_ms[drag_ms.size() / 2];
-  return {
-      {"screenshots", shots},
-      {"script_failures", player.failures},
-      {"drag",
-       {{"frames", drag_ms.size()},
-        {"frame_ms_median", median},
-        {"fps", median > 0 ? 1000.0 / median : 0.0},
-        {"lag_frames_max", lag.empty() ? 0 : *std::max_element(lag.begin(), lag.end())},
-        {"lag_frames", lag},
-        {"bake_ms_median",
-         bake_ms.empty() ? 0.0 : (std::sort(bake_ms.begin(), bake_ms.end()), bake_ms[bake_ms.size() / 2])},
-        {"bakes", bakes}}},
-      {"frames", frame_ms.size()},
-      {"message", panels.message()},
-      {"gl_renderer", reinterpret_cast<const char*>(glGetString(GL_RENDERER))}};
+  std::vector<double> bake_ms;
+  for (const json& b : bakes) bake_ms.push_back(b[0].get<double>());
+  std::sort(bake_ms.begin(), bake_ms.end());
+  return {{"screenshots", shots},
+          {"script_failures", player.failures},
+          {"drag",
+           {{"frames", drag_ms.size()},
+            {"frame_ms_median", median},
+            {"fps", median > 0 ? 1000.0 / median : 0.0},
+            {"lag_frames_max", lag.empty() ? 0 : *std::max_element(lag.begin(), lag.end())},
+            {"lag_frames", lag},
+            {"bake_ms_median", bake_ms.empty() ? 0.0 : bake_ms[bake_ms.size() / 2]},
+            {"bakes", bakes}}},
+          {"frames", frame_ms.size()},
+          {"message", panels.message()},
+          {"gl_renderer", reinterpret_cast<const char*>(glGetString(GL_RENDERER))}};
 }
 
 /// The model of the rig on the command line (read and fitted before the window opens).
 std::unique_ptr<ViewerModel> initial_model(const ViewerGuiOptions& o) {
-  const skinning::SkinSetup setup = o.setup.empty() ? skinning::SkinSetup{} : skinning::load_setup(o.setup);
-  const skinning::Progress progress = [](const std::string& stage, int done, int total) {
-    std::fprintf(stderr, "\r  %-24s %d / %d", stage.c_str(), done, total);
-    if (done == total) std::fprintf(stderr, "\n");
-  };
-  auto skinner = std::make_shared<skinning::Skinner>(
-      skinning::open_rig(o.rig, 30, progress, nullptr, setup.mask), setup, progress);
-  auto model =
-      std::make_unique<ViewerModel>(skinner, skinning::method_from_string(o.method), model_options(o));
+  auto model = open_model(o.rig, o.setup, skinning::method_from_string(o.method), model_options(o),
+                          [](const std::string& stage, int done, int total) {
+                            std::fprintf(stderr, "\r  %-24s %d / %d", stage.c_str(), done, total);
+                            if (done == total) std::fprintf(stderr, "\n");
+                          });
   if (!o.clip.empty()) model->play_clip(o.clip), model->wait_idle();
   return model;
 }
@@ -350,8 +354,7 @@ int run_viewer(const ViewerGuiOptions& o) {
   json shots = json::array();
   std::vector<double> frame_ms;
   std::vector<long> requested, shown;
-  std::vector<double> bake_ms;  // the deformation time of each new frame shown
-  json bakes = json::array();   // and its tracker work: [ms, sub-steps, iterations, capped calls]
+  json bakes = json::array();  // per new frame shown: [ms, sub-steps, iterations, capped calls]
   while (!glfwWindowShouldClose(window) && !(player && player->done())) {
     const auto t0 = Clock::now();
     glfwPollEvents();
@@ -390,7 +393,6 @@ int run_viewer(const ViewerGuiOptions& o) {
     }
     if (shown.empty() || model->shown_id() != shown.back()) {
       const skinning::FrameStats& st = model->stats();
-      bake_ms.push_back(st.ms);
       bakes.push_back({st.ms, st.substeps, st.iterations, st.capped_calls});
     }
     requested.push_back(model->request_id());
@@ -400,7 +402,7 @@ int run_viewer(const ViewerGuiOptions& o) {
   if (player) {
     const std::string path = o.report_path.empty() ? o.screenshot_dir + "/viewer-report.json" : o.report_path;
     write_text_file_atomically(
-        path, report_of(*player, shots, frame_ms, requested, shown, bake_ms, bakes, *panels).dump(1) + "\n");
+        path, report_of(*player, shots, frame_ms, requested, shown, bakes, *panels).dump(1) + "\n");
     for (const std::string& f : player->failures)
       std::fprintf(stderr, "isokit-skin view: script: %s\n", f.c_str());
   }
