@@ -442,9 +442,15 @@ void ViewerModel::worker_loop() {
       error = std::current_exception();
     }
     bool measure = false;
+    if (error) {  // a window waiting in poll(wait_ms) learns of it at once
+      {
+        std::lock_guard<std::mutex> lock(mutex_);
+        error_ = error;
+      }
+      published_.notify_all();
+    }
     {
       std::unique_lock<std::mutex> lock(mutex_);
-      if (error) error_ = error;
       measure =
           !error && !wake_.wait_for(lock, kMeasureDelay, [this] { return stop_ || waiting_.has_value(); });
       if (!measure) busy_ = false;
