@@ -216,6 +216,20 @@ std::vector<BakeResult> bake_methods(Run& run, Skinner& skinner, const std::stri
   return results;
 }
 
+/// The frame a clip's sheet shows: where some method's new interpenetration (`self_overlap_new`)
+/// is largest, so that the red of the sheet shows the worst of it; the frame farthest from the
+/// first pose when no method interpenetrates.
+int sheet_frame(const EvalAnimation& anim, const std::vector<BakeResult>& results) {
+  int frame = -1;
+  double worst = 0;
+  for (const BakeResult& r : results)
+    for (std::size_t k = 0; k < r.stats.size(); ++k) {
+      const double v = r.stats[k].metrics.self_overlap_new;
+      if (v > worst) worst = v, frame = static_cast<int>(k);
+    }
+  return frame >= 0 && !anim.is_bend ? frame : peak_frame(anim.poses);
+}
+
 /// The rows, the metrics JSON and the contact sheet of one animation of one rig.
 void evaluate_animation(Run& run, Skinner& skinner, const std::string& label, const EvalAnimation& anim,
                         bool closed, const RestAgreement& agreement) {
@@ -236,7 +250,7 @@ void evaluate_animation(Run& run, Skinner& skinner, const std::string& label, co
   if (!run.args.render) return;
   const std::vector<RenderView> views =
       outside_views(bend_views(rig, skinner.fitted().partition(), anim.views, anim.poses,
-                               peak_frame(anim.poses), results.front()),
+                               sheet_frame(anim, results), results.front()),
                     results.front());
   const std::string sheet =
       dir + (anim.is_bend ? std::string("contact_sheet") : file_name(anim.name)) + ".png";

@@ -14,6 +14,7 @@
 #include "isokit/skinning/pipeline.h"
 #include "isokit/skinning/report.h"
 #include "isokit/skinning/rig_io.h"
+#include "isokit/skinning/self_overlap.h"
 #include "isokit/skinning/setup.h"
 
 namespace isokit::python {
@@ -201,7 +202,43 @@ std::shared_ptr<Rig> rig_from_arrays(const py::object& vertices, const py::objec
   return rig;
 }
 
+/// `self_overlap(vertices, triangles, resolution)` as a dict (self_overlap.h).
+py::dict self_overlap_of(const py::object& vertices, const py::object& triangles, int resolution,
+                         bool mark_triangles) {
+  const auto v = real_array<float>(vertices, "vertices", {-1, 3});
+  track::Positions p(v.shape(0), 3);
+  if (v.size() > 0) std::memcpy(p.data(), v.data(), static_cast<std::size_t>(v.size()) * sizeof(float));
+  const auto t = real_array<int>(triangles, "triangles", {-1, 3});
+  track::Triangles f(t.shape(0), 3);
+  if (t.size() > 0) std::memcpy(f.data(), t.data(), static_cast<std::size_t>(t.size()) * sizeof(int));
+  SelfOverlapOptions o;
+  o.resolution = resolution;
+  o.mark_triangles = mark_triangles;
+  SelfOverlap r;
+  {
+    py::gil_scoped_release released;
+    r = self_overlap(p, f, o);
+  }
+  py::dict out;
+  out["overlap"] = r.overlap;
+  out["enclosed"] = r.enclosed;
+  out["cell"] = r.cell;
+  out["columns"] = r.columns;
+  out["open_columns"] = r.open_columns;
+  py::array_t<int> marked(static_cast<py::ssize_t>(r.overlap_triangles.size()));
+  if (!r.overlap_triangles.empty())
+    std::memcpy(marked.mutable_data(), r.overlap_triangles.data(), r.overlap_triangles.size() * sizeof(int));
+  out["triangles"] = marked;
+  return out;
+}
+
 void bind_skinning(py::module_& m) {
+  m.def("self_overlap", &self_overlap_of, py::arg("vertices"), py::arg("triangles"), py::arg("resolution") = 160,
+        py::arg("mark_triangles") = false,
+        "Interpenetration by volume: the volume the mesh encloses twice (winding number >= 2) and "
+        "once, by columns on a grid of `resolution` cells across the largest side (open borders "
+        "closed by cones; docs/skinning-metrics.md). Returns {overlap, enclosed, cell, columns, "
+        "open_columns, triangles}: triangles bounding the overlap when mark_triangles.");
   py::class_<Rig, std::shared_ptr<Rig>>(m, "Rig",
                                         "A rigged character: welded rest mesh, joints, weights, clips.")
       .def_static(

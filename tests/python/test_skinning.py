@@ -58,6 +58,7 @@ def test_bakes_with_every_method_give_frames_and_metrics(cylinder_file):
         assert np.abs(frames[0] - rig.rest).max() < 1e-3
         m = result.metrics()
         assert method in m["methods"] and len(m["methods"][method]["frames"]) == 9
+        assert all(f["self_overlap_new"] >= 0 for f in m["methods"][method]["frames"])
     # the bake reports each frame; an exception in the callback stops it
     seen = []
     skinner.bake("dqs", clip="bend", progress=lambda stage, done, total: seen.append((stage, done, total)))
@@ -73,6 +74,27 @@ def test_bakes_with_every_method_give_frames_and_metrics(cylinder_file):
     assert result.frames.shape[0] == 4
     result = skinner.bake("dqs", bends=["Bone1:x:60"], frames=5)
     assert result.frames.shape[0] == 5
+
+
+def test_the_overlap_volume_of_two_boxes_through_each_other():
+    def box(lo, hi):
+        v = np.array([[hi[0] if k & 1 else lo[0], hi[1] if k & 2 else lo[1], hi[2] if k & 4 else lo[2]]
+                      for k in range(8)], np.float32)
+        f = np.array([[0, 2, 3], [0, 3, 1], [4, 5, 7], [4, 7, 6], [0, 1, 5], [0, 5, 4],
+                      [2, 6, 7], [2, 7, 3], [0, 4, 6], [0, 6, 2], [1, 3, 7], [1, 7, 5]], np.int32)
+        return v, f
+
+    (va, fa), (vb, fb) = box((0, 0, 0), (1, 1, 1)), box((0.5, 0, 0), (1.5, 1, 1))
+    v, f = np.vstack([va, vb]), np.vstack([fa, fb + 8])
+    r = skinning.self_overlap(v, f, mark_triangles=True)
+    assert r["overlap"] == pytest.approx(0.5, rel=0.02)
+    assert r["enclosed"] == pytest.approx(1.5, rel=0.02)
+    assert r["open_columns"] == 0 and len(r["triangles"]) > 0
+    # pressed onto one face: nothing enclosed twice
+    vb2, _ = box((1, 0, 0), (2, 1, 1))
+    assert skinning.self_overlap(np.vstack([va, vb2]), f)["overlap"] < 1e-12
+    with pytest.raises(isokit.InputError, match="resolution"):
+        skinning.self_overlap(v, f, resolution=0)
 
 
 @pytest.mark.skipif(not CLI, reason="isokit-skin not built")

@@ -176,6 +176,27 @@ TEST_CASE("e2e: the built-in cylinder at 150 degrees: no intersections with the 
   CHECK(trk.worst.iso_residual_max < 1e-3);
 }
 
+// Interpenetration as a user sees it: at 150 degrees DQS passes the cylinder's two halves into
+// each other (volume enclosed twice), the tracked skin forms a contact instead (issue 42's
+// must-show: DQS > 0.5 % of the volume, tracking2014 <= 1e-4) and returns to rest. A contact
+// fold without a bulge gives up the volume DQS overlaps and the flattened crease: measured 0.87
+// (LBS 0.80, implicit2013 0.855; 2026-12-06); below 0.85 the skin is shrinking.
+TEST_CASE("e2e: the built-in cylinder at 150 degrees: DQS interpenetrates and tracking2014 does not",
+          "[skinning][e2e][slow]") {
+  Skinner sk(make_cylinder(), SkinSetup{});
+  const auto poses = bend_animation(sk.rig(), {parse_bend("Bone1:z:150", sk.rig())}, 31);
+  BakeOptions o;
+  o.self_intersections = false;
+  const BakeResult dqs = sk.bake(Method::kDqs, poses, o);
+  const BakeResult trk = sk.bake(Method::kTracking2014, poses, o);
+  INFO("new overlap: dqs " << dqs.worst.self_overlap_new << ", tracking2014 " << trk.worst.self_overlap_new
+                           << "; tracking2014 volume " << trk.worst.volume_ratio);
+  CHECK(dqs.worst.self_overlap_new > 5e-3);
+  CHECK(trk.worst.self_overlap_new <= 1e-4);
+  CHECK(trk.worst.volume_ratio >= 0.85);
+  CHECK(trk.rest_recovery <= 1e-3);
+}
+
 // Past what the field can fold (170 degrees: the limbs' fields merge) the tracker pushes vertices
 // through their bone's axis; without the axis guard the forearm-like half flattened into a sheet
 // on the way back and the mesh never returned (rest recovery 0.17 of the diagonal, 2026-12-01).
@@ -316,11 +337,14 @@ TEST_CASE("e2e: the built-in cylinder folds to 150 degrees with the bulge operat
   const auto poses = bend_animation(sk.rig(), {parse_bend("Bone1:z:150", sk.rig())}, 31);
   const BakeResult trk = sk.bake(Method::kTracking2014, poses),
                    before = old.bake(Method::kTracking2014, poses);
-  INFO("bulge: " << trk.worst.self_intersections << " pairs, " << trk.worst.new_inverted_triangles
-                 << " inverted, rest " << trk.rest_recovery
-                 << "; controller at 1 from 90 degrees: " << before.worst.self_intersections << " pairs");
-  CHECK(before.worst.self_intersections > 0);
-  CHECK(trk.worst.self_intersections == 0);
+  INFO("bulge: " << trk.worst.self_intersections << " pairs, overlap " << trk.worst.self_overlap_new << ", "
+                 << trk.worst.new_inverted_triangles << " inverted, rest " << trk.rest_recovery
+                 << "; controller at 1 from 90 degrees: " << before.worst.self_intersections << " pairs, overlap "
+                 << before.worst.self_overlap_new);
+  // Judged by the interpenetration volume (a few pairs of skin pressed flat on the contact cross
+  // without passing into each other).
+  CHECK(before.worst.self_overlap_new > 5e-5);
+  CHECK(trk.worst.self_overlap_new <= 1e-5);
   CHECK(trk.worst.new_inverted_triangles <= 5);
   CHECK(trk.rest_recovery <= 1e-3);
 }

@@ -158,6 +158,24 @@ TEST_CASE("rest field: free vertices follow their neighbours, the limb returns t
   CHECK(recovery(180.f, false) > 1e-3f);
 }
 
+namespace {
+
+// The ball of radius 0.5 at the origin.
+FieldFunction ball_field() {
+  return test::as_function(std::make_shared<implicit::SphereField>(Vec3f{0, 0, 0}, 0.5f));
+}
+
+// `plain` with its cap beyond 0.2 along `up` reported in contact: every call smooths it.
+FieldFunction capped(FieldFunction plain, Vec3f up) {
+  return [plain, up](const Vec3f* p, std::size_t n, float* v, Vec3f* g, std::uint8_t* c) {
+    plain(p, n, v, g, c);
+    if (c)
+      for (std::size_t k = 0; k < n; ++k) c[k] = dot(p[k], up) > 0.2f ? 1 : 0;
+  };
+}
+
+}  // namespace
+
 TEST_CASE("rest field: contact smoothing keeps a rigidly moved coarse rest shape in place",
           "[track][rest_field]") {
   // A coarse ball (8 vertices around) whose upper cap the field reports in contact: every call
@@ -166,14 +184,8 @@ TEST_CASE("rest field: contact smoothing keeps a rigidly moved coarse rest shape
   const test::Mesh m = capsule_mesh(0.5f, 0.f, 8, 0, 4);
   const Mat3f r = test::rot_z(0.7f);
   const Vec3f up = r * Vec3f{0.f, 1.f, 0.f};
-  auto sphere = std::make_shared<implicit::SphereField>(Vec3f{0, 0, 0}, 0.5f);
-  const FieldFunction plain = test::as_function(sphere);
-  const FieldFunction field = [plain, up](const Vec3f* p, std::size_t n, float* v, Vec3f* g,
-                                          std::uint8_t* c) {
-    plain(p, n, v, g, c);
-    if (c)
-      for (std::size_t k = 0; k < n; ++k) c[k] = dot(p[k], up) > 0.2f ? 1 : 0;
-  };
+  const FieldFunction plain = ball_field();
+  const FieldFunction field = capped(plain, up);
   Positions moved = m.V;
   for (Eigen::Index i = 0; i < moved.rows(); ++i) {
     const Vec3f q = r * Vec3f{m.V(i, 0), m.V(i, 1), m.V(i, 2)};
@@ -194,6 +206,57 @@ TEST_CASE("rest field: contact smoothing keeps a rigidly moved coarse rest shape
   CHECK(run(true) <= 1e-5f);
   // 2013 eq. 7 (toward the centroid) flattens the cap: about a fifth of an edge here.
   CHECK(run(false) > 1e-2f);
+}
+
+TEST_CASE("contact smoothing in the tangent plane or re-projected moves no vertex into the body",
+          "[track][rest_field]") {
+  // The coarse ball of the test above, its cap reported in contact, pushed 2 % off its iso-values
+  // (outward) so that the call has work: 2013 eq. 7 pulls the cap and the ring around it inward
+  // by a fraction of an edge. In the tangent plane (SmoothingOptions::tangential) nothing moves
+  // inward; followed by Newton sweeps (reproject_steps) the ring around the contact goes back on
+  // its sphere (the contact vertices themselves stay where the smoothing flattened them).
+  const test::Mesh m = capsule_mesh(0.5f, 0.f, 8, 0, 4);
+  const FieldFunction plain = ball_field();
+  const FieldFunction field = capped(plain, Vec3f{0.f, 1.f, 0.f});
+  const std::vector<float> iso = sample_iso_values(plain, m.V);
+  const float edge = 2.f * 3.14159265f * 0.5f / 8.f;
+  // The largest move into the ball (radius lost) in edge lengths and the largest iso residual,
+  // over the vertices smoothed but not in contact (the ring), or over every vertex (`all`).
+  auto run = [&](bool tangential, int reproject, bool all) {
+    TrackerOptions o;
+    o.smoothing.tangential = tangential;
+    o.smoothing.reproject_steps = reproject;
+    IsoSurfaceTracker tracker(m.V, m.F, iso, o);
+    Positions P = m.V * 1.02f;
+    const TrackStats s = tracker.track(field, {}, P);
+    CHECK(s.smoothed_vertices > s.contact_vertices);
+    CHECK(P.allFinite());
+    float inward = 0.f, residual = 0.f;
+    std::vector<float> v(std::size_t(P.rows()));
+    std::vector<Vec3f> g(v.size()), q(v.size());
+    std::vector<std::uint8_t> c(v.size());
+    for (Eigen::Index i = 0; i < P.rows(); ++i) q[std::size_t(i)] = Vec3f{P(i, 0), P(i, 1), P(i, 2)};
+    plain(q.data(), q.size(), v.data(), g.data(), c.data());
+    for (Eigen::Index i = 0; i < P.rows(); ++i) {
+      const std::size_t k = std::size_t(i);
+      const bool ring = tracker.flags().beta[k] > 0.f && !tracker.flags().contact[k];
+      if (!all && !ring) continue;
+      inward = std::max(inward, (m.V.row(i).norm() - P.row(i).norm()) / edge);
+      residual = std::max(residual, std::abs(v[k] - iso[k]));
+    }
+    return std::pair<float, float>(inward, residual);
+  };
+  const auto paper = run(false, 0, true), tangential = run(true, 0, true);
+  const auto ring = run(false, 0, false), reprojected = run(false, 3, false);
+  INFO("inward (edges) / residual: 2013 " << paper.first << " / " << paper.second << " (ring " << ring.first
+                                         << " / " << ring.second << "), tangential " << tangential.first << " / "
+                                         << tangential.second << ", ring re-projected " << reprojected.first << " / "
+                                         << reprojected.second);
+  CHECK(paper.first > 0.05f);
+  CHECK(tangential.first < 0.2f * paper.first);
+  CHECK(ring.first > 0.01f);
+  CHECK(reprojected.first < 0.2f * ring.first);
+  CHECK(reprojected.second < 0.2f * ring.second);
 }
 
 TEST_CASE("rest field: vertices without a usable rest gradient are free, the output stays finite",

@@ -164,6 +164,11 @@ TEST_CASE("viewer: overlays flag the frame's intersecting and inverted triangles
   int inverted = 0;
   for (std::uint8_t f : dqs.inverted) inverted += f;
   CHECK(inverted > 0);  // the fold's triangles face into the field
+  // DQS's fold passes into itself: the triangles bounding the new overlap are flagged.
+  const std::vector<int> overlap = new_overlap_triangles(sk->rig().rest, m.positions(), sk->rig().triangles);
+  REQUIRE(!overlap.empty());
+  for (std::size_t t = 0; t < dqs.overlap.size(); ++t)
+    CHECK(dqs.overlap[t] == (std::binary_search(overlap.begin(), overlap.end(), int(t)) ? 1 : 0));
   m.set_method(Method::kTracking2014);
   const viewer::Overlays& trk = m.overlays();
   CHECK(trk.mask[0] == 0.0f);
@@ -174,6 +179,8 @@ TEST_CASE("viewer: overlays flag the frame's intersecting and inverted triangles
   int contacts = 0;
   for (std::uint8_t c : trk.contact) contacts += c;
   CHECK(contacts > 0);
+  // The tracked skin forms a contact instead: little or no triangle bounds a new overlap.
+  CHECK(std::count(trk.overlap.begin(), trk.overlap.end(), 1) < static_cast<long>(overlap.size()) / 4);
 }
 
 TEST_CASE("viewer: a ray picks the joint it passes nearest to", "[viewer][unit]") {

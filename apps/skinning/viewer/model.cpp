@@ -594,6 +594,9 @@ const Overlays& ViewerModel::overlays() {
     for (const auto& p : details.pairs)
       o.intersecting[std::size_t(p[0])] = o.intersecting[std::size_t(p[1])] = 1;
   }
+  // Interpenetration: the triangles bounding new volume enclosed twice.
+  o.overlap.assign(nt, 0);
+  for (const int t : skinning::new_overlap_triangles(r.rest, f.positions, r.triangles)) o.overlap[std::size_t(t)] = 1;
   overlays_ = std::move(o);
   return *overlays_;
 }

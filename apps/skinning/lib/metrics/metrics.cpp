@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <iterator>
 #include <utility>
 
 #include "isokit/core/mesh_quality.h"
@@ -137,6 +138,8 @@ FrameMetrics worst_of(const FrameMetrics& a, const FrameMetrics& b) {
   w.self_intersections = worse(a.self_intersections, b.self_intersections);
   w.self_intersections_new = worse(a.self_intersections_new, b.self_intersections_new);
   w.degenerate_faces = worse(a.degenerate_faces, b.degenerate_faces);
+  w.self_overlap = worse(a.self_overlap, b.self_overlap);
+  w.self_overlap_new = worse(a.self_overlap_new, b.self_overlap_new);
   w.inverted_triangles = worse(a.inverted_triangles, b.inverted_triangles);
   w.new_inverted_triangles = worse(a.new_inverted_triangles, b.new_inverted_triangles);
   w.contact_vertices = worse(a.contact_vertices, b.contact_vertices);
@@ -167,6 +170,20 @@ FrameMetricsEvaluator::FrameMetricsEvaluator(track::Positions rest, track::Trian
   closed_triangles_ = closure_.closed() ? triangles_ : closed_rows(triangles_, closure_);
   rest_volume_ = closed_triangles_.rows() > 0 ? enclosed_volume(rest_, closed_triangles_) : 0.0;
   rest_diagonal_ = bbox_diagonal(rest_);
+  SelfOverlapOptions overlap_options;
+  overlap_options.mark_triangles = true;
+  rest_overlap_ = self_overlap(rest_, triangles_, overlap_options);
+}
+
+std::vector<int> FrameMetricsEvaluator::new_overlap_triangles(const track::Positions& posed) const {
+  detail::check_same_vertex_count(rest_, posed, "FrameMetricsEvaluator::new_overlap_triangles");
+  SelfOverlapOptions options;
+  options.mark_triangles = true;
+  const std::vector<int> now = self_overlap(posed, triangles_, options).overlap_triangles;
+  const std::vector<int>& at_rest = rest_overlap_.overlap_triangles;
+  std::vector<int> out;
+  std::set_difference(now.begin(), now.end(), at_rest.begin(), at_rest.end(), std::back_inserter(out));
+  return out;
 }
 
 const std::vector<std::array<int, 2>>& FrameMetricsEvaluator::rest_pairs() const {
@@ -180,7 +197,8 @@ const std::vector<std::array<int, 2>>& FrameMetricsEvaluator::rest_pairs() const
   return rest_pairs_;
 }
 
-FrameMetrics FrameMetricsEvaluator::evaluate(const track::Positions& posed, bool self_intersections) const {
+FrameMetrics FrameMetricsEvaluator::evaluate(const track::Positions& posed, bool self_intersections,
+                                             bool overlap) const {
   detail::check_same_vertex_count(rest_, posed, "FrameMetricsEvaluator::evaluate");
   FrameMetrics m;
   if (self_intersections) {
@@ -194,6 +212,11 @@ FrameMetrics FrameMetricsEvaluator::evaluate(const track::Positions& posed, bool
     m.self_intersections_new = 0;
     for (const auto& pair : details.pairs)
       m.self_intersections_new += std::binary_search(at_rest.begin(), at_rest.end(), pair) ? 0 : 1;
+  }
+  if (overlap) {
+    m.self_overlap = self_overlap(posed, triangles_).overlap;
+    if (rest_overlap_.enclosed > 0)
+      m.self_overlap_new = std::max(0.0, m.self_overlap - rest_overlap_.overlap) / rest_overlap_.enclosed;
   }
   if (closed_triangles_.rows() > 0) {
     m.volume = enclosed_volume(posed, closed_triangles_);

@@ -27,6 +27,8 @@ json count(int v) {
 json metrics_to_json(const FrameMetrics& m) {
   return json{{"self_intersections", count(m.self_intersections)},
               {"self_intersections_new", count(m.self_intersections_new)},
+              {"self_overlap", num(m.self_overlap)},
+              {"self_overlap_new", num(m.self_overlap_new)},
               {"degenerate_faces", count(m.degenerate_faces)},
               {"inverted_triangles", count(m.inverted_triangles)},
               {"new_inverted_triangles", count(m.new_inverted_triangles)},
@@ -174,13 +176,13 @@ std::string comparison_table(const std::vector<BakeResult>& results) {
     return std::string(b);
   };
   std::ostringstream o;
-  o << "| method | self-intersections | inverted triangles (new) | iso residual max | edge distortion mean / "
+  o << "| method | new overlap (% of volume) | self-intersections | inverted triangles (new) | iso residual max | edge distortion mean / "
        "max | "
        "volume ratio | rest recovery | calls at cap | ms/frame | × dqs |\n";
-  o << "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+  o << "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
   for (const BakeResult& r : results) {
     const FrameMetrics& w = r.worst;
-    o << "| " << to_string(r.method) << " | "
+    o << "| " << to_string(r.method) << " | " << fmt("%.4f", 100 * w.self_overlap_new) << " | "
       << (w.self_intersections >= 0 ? std::to_string(w.self_intersections) : "-") << " | "
       << (w.inverted_triangles >= 0 ? std::to_string(w.inverted_triangles) : "-") << " ("
       << (w.new_inverted_triangles >= 0 ? std::to_string(w.new_inverted_triangles) : "-") << ") | "

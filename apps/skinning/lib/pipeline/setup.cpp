@@ -386,6 +386,8 @@ void check_tracker_keys(const json& t, const std::string& w) {
               "fold_contacts",
               "free_vertex_angle_deg",
               "smoothing_keep_detail",
+              "smoothing_tangential",
+              "smoothing_reproject_steps",
               "iso_tolerance",
               "global_regularization"},
              w);
@@ -432,6 +434,10 @@ void read_tracker(const json& t, const std::string& w, SkinSetup& s) {
           w + ".free_vertex_angle_deg", "must be in (0, 180]",
           "use 60 (the default) or 180 (every vertex held to its iso-value, 2014)");
   read(t, "smoothing_keep_detail", s.tracker.smoothing.keep_detail, w);
+  read(t, "smoothing_tangential", s.tracker.smoothing.tangential, w);
+  read(t, "smoothing_reproject_steps", s.tracker.smoothing.reproject_steps, w);
+  require(s.tracker.smoothing.reproject_steps >= 0 && s.tracker.smoothing.reproject_steps <= 100,
+          w + ".smoothing_reproject_steps", "must be in [0, 100]", "use 0 (none, 2013) or a few");
   read(t, "iso_tolerance", s.tracker.iso_tolerance, w);
   require(std::isfinite(s.tracker.iso_tolerance) && s.tracker.iso_tolerance > 0.f, w + ".iso_tolerance",
           "must be > 0 (field units)", "use 1e-3 (the default)");

@@ -17,14 +17,19 @@ RenderOptions options_for(const Rig& rig, const track::Positions& positions, con
   o.view_direction = v.view_direction;
   o.up = v.up;
   o.frame = v.box;
+  // Interpenetration in red (the triangles bounding a region the skin encloses twice that it did
+  // not at rest); triangles that only cross another (touching skins) in yellow.
   SelfIntersectionDetails d;
   SelfIntersectionOptions so;
   so.max_pairs = 20000;
-  if (count_self_intersections(positions, rig.triangles, &d, so) > 0) {
+  const bool crossing = count_self_intersections(positions, rig.triangles, &d, so) > 0;
+  const std::vector<int> overlap = new_overlap_triangles(rig.rest, positions, rig.triangles);
+  if (crossing || !overlap.empty()) {
     o.face_colors = Colors::Constant(rig.triangles.rows(), 3, 0.f);
     o.face_colors.rowwise() = o.base_color.transpose();
     for (const auto& p : d.pairs)
-      for (int f : p) o.face_colors.row(f) << 0.9f, 0.1f, 0.1f;
+      for (int f : p) o.face_colors.row(f) << 0.95f, 0.8f, 0.2f;
+    for (int f : overlap) o.face_colors.row(f) << 0.9f, 0.1f, 0.1f;
   }
   return o;
 }

@@ -10,7 +10,7 @@ namespace isokit::viewer::gui {
 
 namespace {
 
-/// Per-face (intersecting, inverted) or per-vertex (contacts, mask, distance to DQS) colours of
+/// Per-face (interpenetration, intersecting, inverted) or per-vertex (contacts, mask, distance to DQS) colours of
 /// `overlay`; the other set stays empty.
 void overlay_colours(Overlay overlay, const Overlays& o, std::size_t nv, std::size_t nt,
                      skinning::RenderOptions& options) {
@@ -29,6 +29,9 @@ void overlay_colours(Overlay overlay, const Overlays& o, std::size_t nv, std::si
   };
   switch (overlay) {
     case Overlay::kNone:
+      break;
+    case Overlay::kOverlap:
+      faces(o.overlap);
       break;
     case Overlay::kIntersecting:
       faces(o.intersecting);

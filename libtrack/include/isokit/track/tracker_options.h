@@ -24,6 +24,19 @@ struct SmoothingOptions {
   /// contacts from flattening (measured on the real rigs: docs/tracking.md, step 4 "Keeping the
   /// rest detail").
   bool keep_detail{false};
+  /// Newton sweeps (one field evaluation each) over the smoothed vertices after the smoothing,
+  /// back onto their iso-values, so that the smoothing does not leave skin shrunk inside the body
+  /// (count; default 0 here: none, as in 2013 §5; the tracker's default is 2; 2014 tracker only).
+  /// Not in the papers; decided on the real rigs (docs/decisions/contacts-judged-by-overlap.md).
+  int reproject_steps{0};
+  /// Move each smoothed vertex within its tangent plane only: the step toward the centroid loses
+  /// its component along the field's normal at the vertex (∇f/|∇f| at its last evaluation), and
+  /// vertices on an open border are left alone, so that the smoothing takes the oscillation out
+  /// of a crease without moving skin into the body or off its iso-value (true; 2014 tracker only,
+  /// which has the normals), or the full step (false, the default: 2013 eq. 7, which on a coarse
+  /// mesh moves contact vertices inward by up to an edge per call). Not in the papers; issue 42
+  /// "contacts without shrinking", measured in docs/skinning-real-rigs.md.
+  bool tangential{false};
 };
 
 /// Fold repair after the contact smoothing (not in the papers; docs/tracking.md, step 5 "Fold
@@ -119,7 +132,9 @@ struct TrackerOptions {
   float contact_angle_deg{55.0f};
   /// Contact smoothing (2013 §5 eq. 7; default 3 β-diffusion and 5 smoothing steps, the 2013
   /// projector keeps 2 and 3: docs/tracking.md, "Deviations", smoothing step counts).
-  SmoothingOptions smoothing{3, 5};
+  /// The contact smoothing: 3 β-diffusion and 5 smoothing steps, then 2 Newton sweeps of the
+  /// smoothed vertices back onto their iso-values (`reproject_steps`; the paper preset: 2, 3, 0).
+  SmoothingOptions smoothing{3, 5, false, 2};
   /// Free vertices: a vertex where the field at rest disagrees with the rest mesh — the field's
   /// inward direction ∇f/|∇f| at its rest position is more than this angle away from the inward
   /// vertex normal, or ∇f is not usable there — is not held to its iso-value: no Newton step, a

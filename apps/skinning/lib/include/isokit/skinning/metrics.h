@@ -19,6 +19,7 @@
 #include <Eigen/Geometry>
 
 #include "isokit/skinning/mesh_closure.h"
+#include "isokit/skinning/self_overlap.h"
 #include "isokit/track/mesh.h"
 
 namespace isokit::skinning {
@@ -90,6 +91,13 @@ struct FrameMetrics {
   int self_intersections{-1};                 ///< `count_self_intersections`
   int self_intersections_new{-1};             ///< pairs that are not a rest pair (by identity, not by count)
   int degenerate_faces{-1};                   ///< `SelfIntersectionDetails::degenerate_count`
+  /// Interpenetration by volume (self_overlap.h): the volume the skin encloses twice (|winding
+  /// number| >= 2), mesh units³.
+  double self_overlap{kNotComputed};
+  /// max(0, `self_overlap` − the rest frame's) / the rest mesh's enclosed volume (|w| >= 1): the
+  /// share of the body that interpenetrates and did not at rest. The contact criterion
+  /// (docs/skinning-metrics.md).
+  double self_overlap_new{kNotComputed};
   double volume{kNotComputed};                ///< `enclosed_volume` of the closed components, mesh units³
   double volume_ratio{kNotComputed};          ///< volume / rest volume (NaN when no component is closed)
   double edge_distortion_mean{kNotComputed};  ///< `EdgeDistortion::mean` from rest, no unit
@@ -123,9 +131,19 @@ class FrameMetricsEvaluator {
   FrameMetricsEvaluator(track::Positions rest, track::Triangles triangles,
                         SelfIntersectionOptions options = {});
 
-  /// Without `self_intersections` the exact pass (the slowest) is skipped: both counts stay -1.
+  /// Without `self_intersections` the exact pass (the slowest) is skipped: both counts stay -1;
+  /// without `self_overlap` the overlap volume is skipped (both stay NaN).
   /// \throw InputError if `posed` has a different vertex count from the rest mesh.
-  FrameMetrics evaluate(const track::Positions& posed, bool self_intersections = true) const;
+  FrameMetrics evaluate(const track::Positions& posed, bool self_intersections = true,
+                        bool self_overlap = true) const;
+
+  /// The triangles that bound a region the posed skin encloses twice and that did not bound one
+  /// at rest (by identity, like `self_intersections_new`), ascending: the overlay of the viewer
+  /// and the renders.
+  std::vector<int> new_overlap_triangles(const track::Positions& posed) const;
+
+  /// The rest mesh's volume enclosed twice and once (`self_overlap` at rest).
+  const SelfOverlap& rest_overlap() const { return rest_overlap_; }
 
   const MeshClosure& closure() const { return closure_; }
   /// Rest volume of the closed components (0 when none is closed).
@@ -146,6 +164,7 @@ class FrameMetricsEvaluator {
   std::vector<double> rest_lengths_;
   double rest_volume_{0};
   double rest_diagonal_{0};
+  SelfOverlap rest_overlap_;  ///< with the rest mesh's marked triangles
 };
 
 }  // namespace isokit::skinning

@@ -1,7 +1,9 @@
 // SPDX-License-Identifier: MIT
 /// \file
 /// Pictures of bakes: close-up views of bent joints and the contact sheet comparing methods
-/// side by side (rows = methods, columns = views). Self-intersecting triangles are drawn red.
+/// side by side (rows = methods, columns = views). Triangles bounding a new interpenetration (a
+/// region the skin encloses twice and did not at rest, self_overlap.h) are drawn red; triangles
+/// that only cross another one (skins touching on a contact surface) yellow.
 #pragma once
 
 #include <string>

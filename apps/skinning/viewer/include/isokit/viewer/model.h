@@ -68,6 +68,9 @@ struct Overlays {
   std::vector<float> dqs_distance;         ///< per vertex: distance to DQS's position, rig units
   std::vector<std::uint8_t> inverted;      ///< per triangle: inverted w.r.t. the field (2014 tree)
   std::vector<std::uint8_t> intersecting;  ///< per triangle: in a self-intersecting pair
+  /// Per triangle: bounds a region the skin encloses twice that it did not at rest
+  /// (interpenetration, skinning::new_overlap_triangles).
+  std::vector<std::uint8_t> overlap;
 };
 
 class ViewerModel {
