@@ -29,8 +29,8 @@ const Posed& posed(int vertices) {
   if (it != cache.end()) return it->second;
   Posed p{make_humanoid({vertices, true}), {}};
   const std::vector<Pose> poses = bend_animation(
-      p.rig, {parse_bend("LeftForeArm:x:150", p.rig), parse_bend("LeftLeg:x:150", p.rig)}, 2);
-  dual_quaternion_blend(p.rig.weights, skinning_matrices(p.rig, poses.back()), p.rig.rest, p.dqs, nullptr, 1024);
+      p.rig, {parse_bend("LeftForeArm:x:150", p.rig), parse_bend("LeftLeg:x:150", p.rig)}, 3);
+  dual_quaternion_blend(p.rig.weights, skinning_matrices(p.rig, poses[1]), p.rig.rest, p.dqs, nullptr, 1024);
   return cache.emplace(vertices, std::move(p)).first->second;
 }
 
