@@ -24,9 +24,11 @@ struct SmoothingOptions {
   /// contacts from flattening (measured on the real rigs: docs/tracking.md, step 4 "Keeping the
   /// rest detail").
   bool keep_detail{false};
-  /// Newton sweeps (one field evaluation each) over the smoothed vertices after the smoothing,
-  /// back onto their iso-values, so that the smoothing does not leave skin shrunk inside the body
-  /// (count; default 0 here: none, as in 2013 §5; the tracker's default is 2; 2014 tracker only).
+  /// Newton sweeps (one field evaluation each) over the smoothed vertices that are not in contact
+  /// (the ring around the contacts) after the smoothing, back onto their iso-values, so that the
+  /// smoothing does not leave skin shrunk inside the body; the contact vertices stay where the
+  /// smoothing flattened the crease (count; default 0 here: none, as in 2013 §5; the tracker's
+  /// default is 2; 2014 tracker only).
   /// Not in the papers; decided on the real rigs (docs/decisions/contacts-judged-by-overlap.md).
   int reproject_steps{0};
   /// Move each smoothed vertex within its tangent plane only: the step toward the centroid loses
@@ -130,10 +132,10 @@ struct TrackerOptions {
   /// The gradient-angle rule's threshold between two consecutive evaluations (degrees, in
   /// (0, 180]; default 55: 2013 §5).
   float contact_angle_deg{55.0f};
-  /// Contact smoothing (2013 §5 eq. 7; default 3 β-diffusion and 5 smoothing steps, the 2013
-  /// projector keeps 2 and 3: docs/tracking.md, "Deviations", smoothing step counts).
-  /// The contact smoothing: 3 β-diffusion and 5 smoothing steps, then 2 Newton sweeps of the
-  /// smoothed vertices back onto their iso-values (`reproject_steps`; the paper preset: 2, 3, 0).
+  /// Contact smoothing (2013 §5 eq. 7): 3 β-diffusion and 5 smoothing steps (the 2013 projector
+  /// keeps 2 and 3: docs/tracking.md, "Deviations", smoothing step counts), then 2 Newton sweeps
+  /// of the smoothed vertices not in contact back onto their iso-values (`reproject_steps`; the
+  /// paper preset: 2, 3, 0).
   SmoothingOptions smoothing{3, 5, false, 2};
   /// Free vertices: a vertex where the field at rest disagrees with the rest mesh — the field's
   /// inward direction ∇f/|∇f| at its rest position is more than this angle away from the inward
