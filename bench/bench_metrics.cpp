@@ -28,8 +28,8 @@ const Posed& posed(int vertices) {
   auto it = cache.find(vertices);
   if (it != cache.end()) return it->second;
   Posed p{make_humanoid({vertices, true}), {}};
-  const std::vector<Pose> poses = bend_animation(
-      p.rig, {parse_bend("LeftForeArm:x:150", p.rig), parse_bend("LeftLeg:x:150", p.rig)}, 3);
+  const std::vector<Pose> poses =
+      bend_animation(p.rig, {parse_bend("LeftForeArm:x:150", p.rig), parse_bend("LeftLeg:x:150", p.rig)}, 3);
   dual_quaternion_blend(p.rig.weights, skinning_matrices(p.rig, poses[1]), p.rig.rest, p.dqs, nullptr, 1024);
   return cache.emplace(vertices, std::move(p)).first->second;
 }
@@ -60,7 +60,10 @@ void BM_SelfIntersections(benchmark::State& state) {
 
 // Args: humanoid vertices (5000 gives ~10k triangles), parallel (0 serial, 1 every core).
 BENCHMARK(BM_SelfOverlap)->ArgsProduct({{5000, 13000}, {0, 1}})->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK(BM_SelfIntersections)->ArgsProduct({{5000, 13000}, {0, 1}})->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_SelfIntersections)
+    ->ArgsProduct({{5000, 13000}, {0, 1}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 }  // namespace
 

@@ -112,6 +112,11 @@ std::string cell(const json& v, const char* format) {
   return b;
 }
 
+/// A share as a percentage (null stays null).
+json percent(const json& v) {
+  return v.is_number() ? json(100 * v.get<double>()) : json(nullptr);
+}
+
 std::string count_cell(const json& v) {
   return v.is_number() ? std::to_string(std::llround(v.get<double>())) : "—";
 }
@@ -145,8 +150,9 @@ Row error_row(const std::string& rig, const std::string& animation, const std::s
 
 std::string markdown_table(const std::vector<Row>& rows) {
   std::ostringstream o;
-  o << "| rig | animation | method | frames | overlap new (%) | self-int. new (all) | new inverted | edge dist. max / mean "
-       "| volume min / max | iso residual | rest recovery | ms mean / worst | calls at cap "
+  o << "| rig | animation | method | frames | overlap new (%) | self-int. new (all) | new inverted "
+       "| edge dist. max / mean | volume min / max | iso residual | rest recovery | ms mean / worst | calls "
+       "at cap "
        "| iterations per call median / p95 |\n"
        "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
   for (const Row& r : rows) {
@@ -156,21 +162,17 @@ std::string markdown_table(const std::vector<Row>& rows) {
       o << "**failed:** " << r["error"].get<std::string>() << " | | | | | | | | | | |\n";
       continue;
     }
-    o << r["frames"].get<int>() << " | "
-      << cell(r["self_overlap_new"].is_number() ? json(100 * r["self_overlap_new"].get<double>()) : json(nullptr),
-              "%.4f")
-      << " | " << count_cell(r["self_intersections_new"]) << " ("
-      << count_cell(r["self_intersections"]) << ") | " << count_cell(r["new_inverted_triangles"]) << " | "
-      << cell(r["edge_distortion_max"], "%.2f") << " / " << cell(r["edge_distortion_mean"], "%.3f") << " | "
+    o << r["frames"].get<int>() << " | " << cell(percent(r["self_overlap_new"]), "%.4f") << " | "
+      << count_cell(r["self_intersections_new"]) << " (" << count_cell(r["self_intersections"]) << ") | "
+      << count_cell(r["new_inverted_triangles"]) << " | " << cell(r["edge_distortion_max"], "%.2f") << " / "
+      << cell(r["edge_distortion_mean"], "%.3f") << " | "
       << (r["closed"].get<bool>()
               ? cell(r["volume_ratio_min"], "%.3f") + " / " + cell(r["volume_ratio_max"], "%.3f")
               : std::string("(open)"))
       << " | " << cell(r["iso_residual_max"], "%.1e") << " | " << cell(r["rest_recovery"], "%.1e") << " | "
       << cell(r["mean_ms"], "%.1f") << " / " << cell(r["worst_ms"], "%.1f") << " | "
-      << cell(r["capped_share"].is_number() ? json(100 * r["capped_share"].get<double>()) : json(nullptr),
-              "%.0f %%")
-      << " | " << cell(r["iterations_median"], "%.0f") << " / " << cell(r["iterations_p95"], "%.0f")
-      << " |\n";
+      << cell(percent(r["capped_share"]), "%.0f %%") << " | " << cell(r["iterations_median"], "%.0f") << " / "
+      << cell(r["iterations_p95"], "%.0f") << " |\n";
   }
   return o.str();
 }

@@ -131,9 +131,10 @@ void smooth_contacts(TrackState& s) {
   if (o.smoothing.keep_detail) detail = rest_detail(s);
   std::vector<std::uint8_t> border;
   if (o.smoothing.tangential) border = border_vertices(s.m);
-  s.stats.smoothed_vertices = contact_smoothing(
-      s.m.adj, s.flags.contact, o.smoothing, o.grain, s.cur, s.flags.beta, detail.empty() ? nullptr : detail.data(),
-      o.smoothing.tangential ? s.normal.data() : nullptr, border.empty() ? nullptr : border.data());
+  s.stats.smoothed_vertices = contact_smoothing(s.m.adj, s.flags.contact, o.smoothing, o.grain, s.cur,
+                                                s.flags.beta, detail.empty() ? nullptr : detail.data(),
+                                                o.smoothing.tangential ? s.normal.data() : nullptr,
+                                                border.empty() ? nullptr : border.data());
   if (!s.anchors.empty())  // pinned vertices stay at their anchors
     for (std::size_t i = 0; i < s.n; ++i)
       if (s.pinned(i) && s.flags.beta[i] > 0.f) {

@@ -123,8 +123,7 @@ void validate_options(const TrackerOptions& o) {
           "cg_max_iterations and cg_rings must be >= 1", "use e.g. 200 and 2");
   require(o.smoothing.beta_diffusion_steps >= 0 && o.smoothing.smoothing_steps >= 0 &&
               o.smoothing.reproject_steps >= 0,
-          "SmoothingOptions",
-          "step counts must be >= 0", "pass non-negative counts");
+          "SmoothingOptions", "step counts must be >= 0", "pass non-negative counts");
   validate_repair_options(o.fold_repair, o.orientation_repair);
 }
 

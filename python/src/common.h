@@ -11,12 +11,14 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <cstring>
 #include <functional>
 #include <mutex>
 #include <string>
 #include <vector>
 
 #include "isokit/core/error.h"
+#include "isokit/track/mesh.h"
 
 namespace isokit::python {
 
@@ -54,6 +56,22 @@ py::array_t<T, py::array::c_style> real_array(py::handle obj, const char* name,
     }
   }
   return out;
+}
+
+/// `obj` as `#V by 3` float positions (`rows` of them, -1 for any number). \throw InputError.
+inline track::Positions positions_of(const py::object& obj, const char* name, py::ssize_t rows = -1) {
+  const auto a = real_array<float>(obj, name, {rows, 3});
+  track::Positions p(a.shape(0), 3);
+  if (a.size() > 0) std::memcpy(p.data(), a.data(), static_cast<std::size_t>(a.size()) * sizeof(float));
+  return p;
+}
+
+/// `obj` as `#F by 3` vertex indices. \throw InputError.
+inline track::Triangles triangles_of(const py::object& obj, const char* name) {
+  const auto t = real_array<int>(obj, name, {-1, 3});
+  track::Triangles f(t.shape(0), 3);
+  if (t.size() > 0) std::memcpy(f.data(), t.data(), static_cast<std::size_t>(t.size()) * sizeof(int));
+  return f;
 }
 
 /// Long C++ work with the GIL released, calling back into Python (a progress callback, a field

@@ -205,12 +205,8 @@ std::shared_ptr<Rig> rig_from_arrays(const py::object& vertices, const py::objec
 /// `self_overlap(vertices, triangles, resolution)` as a dict (self_overlap.h).
 py::dict self_overlap_of(const py::object& vertices, const py::object& triangles, int resolution,
                          bool mark_triangles) {
-  const auto v = real_array<float>(vertices, "vertices", {-1, 3});
-  track::Positions p(v.shape(0), 3);
-  if (v.size() > 0) std::memcpy(p.data(), v.data(), static_cast<std::size_t>(v.size()) * sizeof(float));
-  const auto t = real_array<int>(triangles, "triangles", {-1, 3});
-  track::Triangles f(t.shape(0), 3);
-  if (t.size() > 0) std::memcpy(f.data(), t.data(), static_cast<std::size_t>(t.size()) * sizeof(int));
+  const track::Positions p = positions_of(vertices, "vertices");
+  const track::Triangles f = triangles_of(triangles, "triangles");
   SelfOverlapOptions o;
   o.resolution = resolution;
   o.mark_triangles = mark_triangles;
@@ -233,8 +229,8 @@ py::dict self_overlap_of(const py::object& vertices, const py::object& triangles
 }
 
 void bind_skinning(py::module_& m) {
-  m.def("self_overlap", &self_overlap_of, py::arg("vertices"), py::arg("triangles"), py::arg("resolution") = 160,
-        py::arg("mark_triangles") = false,
+  m.def("self_overlap", &self_overlap_of, py::arg("vertices"), py::arg("triangles"),
+        py::arg("resolution") = 160, py::arg("mark_triangles") = false,
         "Interpenetration by volume: the volume the mesh encloses twice (winding number >= 2) and "
         "once, by columns on a grid of `resolution` cells across the largest side (open borders "
         "closed by cones; docs/skinning-metrics.md). Returns {overlap, enclosed, cell, columns, "

@@ -73,13 +73,6 @@ FieldFunction field_function(const py::object& field, Released& released, Python
   };
 }
 
-Positions positions_of(const py::object& obj, const char* name, py::ssize_t rows = -1) {
-  const auto a = real_array<float>(obj, name, {rows, 3});
-  Positions p(a.shape(0), 3);
-  if (a.size() > 0) std::memcpy(p.data(), a.data(), static_cast<std::size_t>(a.size()) * sizeof(float));
-  return p;
-}
-
 py::array_t<float> to_array(const Positions& p) {
   py::array_t<float> out({static_cast<py::ssize_t>(p.rows()), py::ssize_t{3}});
   if (p.size() > 0)
@@ -167,10 +160,7 @@ class PyTracker {
   PyTracker(const py::object& rest, const py::object& triangles, const py::object& iso, const py::kwargs& kw)
       : options_(options_from(kw)) {
     rest_ = positions_of(rest, "rest");
-    const auto t = real_array<int>(triangles, "triangles", {-1, 3});
-    Triangles tri(t.shape(0), 3);
-    if (t.size() > 0) std::memcpy(tri.data(), t.data(), static_cast<std::size_t>(t.size()) * sizeof(int));
-    triangles_ = tri;
+    triangles_ = triangles_of(triangles, "triangles");
     const auto v = real_array<float>(iso, "iso", {rest_.rows()});
     iso_.assign(v.data(), v.data() + v.size());
   }

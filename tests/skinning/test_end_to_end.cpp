@@ -339,8 +339,8 @@ TEST_CASE("e2e: the built-in cylinder folds to 150 degrees with the bulge operat
                    before = old.bake(Method::kTracking2014, poses);
   INFO("bulge: " << trk.worst.self_intersections << " pairs, overlap " << trk.worst.self_overlap_new << ", "
                  << trk.worst.new_inverted_triangles << " inverted, rest " << trk.rest_recovery
-                 << "; controller at 1 from 90 degrees: " << before.worst.self_intersections << " pairs, overlap "
-                 << before.worst.self_overlap_new);
+                 << "; controller at 1 from 90 degrees: " << before.worst.self_intersections
+                 << " pairs, overlap " << before.worst.self_overlap_new);
   // Judged by the interpenetration volume (a few pairs of skin pressed flat on the contact cross
   // without passing into each other).
   CHECK(before.worst.self_overlap_new > 5e-5);

@@ -21,11 +21,11 @@ using track::Triangles;
 
 namespace {
 
-using testing::kPi;
-using testing::Mesh;
 using testing::from_lists;
 using testing::icosphere;
 using testing::join;
+using testing::kPi;
+using testing::Mesh;
 using testing::orient_outward;
 using testing::vtx;
 

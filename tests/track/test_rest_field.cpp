@@ -249,9 +249,9 @@ TEST_CASE("contact smoothing in the tangent plane or re-projected moves no verte
   const auto paper = run(false, 0, true), tangential = run(true, 0, true);
   const auto ring = run(false, 0, false), reprojected = run(false, 3, false);
   INFO("inward (edges) / residual: 2013 " << paper.first << " / " << paper.second << " (ring " << ring.first
-                                         << " / " << ring.second << "), tangential " << tangential.first << " / "
-                                         << tangential.second << ", ring re-projected " << reprojected.first << " / "
-                                         << reprojected.second);
+                                          << " / " << ring.second << "), tangential " << tangential.first
+                                          << " / " << tangential.second << ", ring re-projected "
+                                          << reprojected.first << " / " << reprojected.second);
   CHECK(paper.first > 0.05f);
   CHECK(tangential.first < 0.2f * paper.first);
   CHECK(ring.first > 0.01f);

@@ -596,7 +596,8 @@ const Overlays& ViewerModel::overlays() {
   }
   // Interpenetration: the triangles bounding new volume enclosed twice.
   o.overlap.assign(nt, 0);
-  for (const int t : skinning::new_overlap_triangles(r.rest, f.positions, r.triangles)) o.overlap[std::size_t(t)] = 1;
+  for (const int t : skinning::new_overlap_triangles(r.rest, f.positions, r.triangles))
+    o.overlap[std::size_t(t)] = 1;
   overlays_ = std::move(o);
   return *overlays_;
 }

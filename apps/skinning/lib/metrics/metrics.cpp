@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <iterator>
 #include <utility>
 
 #include "isokit/core/mesh_quality.h"
@@ -170,20 +169,7 @@ FrameMetricsEvaluator::FrameMetricsEvaluator(track::Positions rest, track::Trian
   closed_triangles_ = closure_.closed() ? triangles_ : closed_rows(triangles_, closure_);
   rest_volume_ = closed_triangles_.rows() > 0 ? enclosed_volume(rest_, closed_triangles_) : 0.0;
   rest_diagonal_ = bbox_diagonal(rest_);
-  SelfOverlapOptions overlap_options;
-  overlap_options.mark_triangles = true;
-  rest_overlap_ = self_overlap(rest_, triangles_, overlap_options);
-}
-
-std::vector<int> FrameMetricsEvaluator::new_overlap_triangles(const track::Positions& posed) const {
-  detail::check_same_vertex_count(rest_, posed, "FrameMetricsEvaluator::new_overlap_triangles");
-  SelfOverlapOptions options;
-  options.mark_triangles = true;
-  const std::vector<int> now = self_overlap(posed, triangles_, options).overlap_triangles;
-  const std::vector<int>& at_rest = rest_overlap_.overlap_triangles;
-  std::vector<int> out;
-  std::set_difference(now.begin(), now.end(), at_rest.begin(), at_rest.end(), std::back_inserter(out));
-  return out;
+  rest_overlap_ = self_overlap(rest_, triangles_);
 }
 
 const std::vector<std::array<int, 2>>& FrameMetricsEvaluator::rest_pairs() const {

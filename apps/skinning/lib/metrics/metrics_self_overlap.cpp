@@ -128,12 +128,16 @@ struct ProjectedTriangle {
 template <class Emit>
 void for_each_crossing(const ColumnGrid& g, const ProjectedTriangle& tri, Emit&& emit) {
   if (tri.sign == 0) return;
-  const double xmin = std::min({tri.x[0], tri.x[1], tri.x[2]}), xmax = std::max({tri.x[0], tri.x[1], tri.x[2]});
-  const double ymin = std::min({tri.y[0], tri.y[1], tri.y[2]}), ymax = std::max({tri.y[0], tri.y[1], tri.y[2]});
+  const double xmin = std::min({tri.x[0], tri.x[1], tri.x[2]}),
+               xmax = std::max({tri.x[0], tri.x[1], tri.x[2]});
+  const double ymin = std::min({tri.y[0], tri.y[1], tri.y[2]}),
+               ymax = std::max({tri.y[0], tri.y[1], tri.y[2]});
   const int i0 = std::max(0, static_cast<int>(std::floor((xmin - g.x0) / g.cell - ColumnGrid::kOffsetX)));
-  const int i1 = std::min(g.nx - 1, static_cast<int>(std::ceil((xmax - g.x0) / g.cell - ColumnGrid::kOffsetX)));
+  const int i1 =
+      std::min(g.nx - 1, static_cast<int>(std::ceil((xmax - g.x0) / g.cell - ColumnGrid::kOffsetX)));
   const int j0 = std::max(0, static_cast<int>(std::floor((ymin - g.y0) / g.cell - ColumnGrid::kOffsetY)));
-  const int j1 = std::min(g.ny - 1, static_cast<int>(std::ceil((ymax - g.y0) / g.cell - ColumnGrid::kOffsetY)));
+  const int j1 =
+      std::min(g.ny - 1, static_cast<int>(std::ceil((ymax - g.y0) / g.cell - ColumnGrid::kOffsetY)));
   for (int j = j0; j <= j1; ++j)
     for (int i = i0; i <= i1; ++i) {
       double z = 0;
@@ -143,8 +147,9 @@ void for_each_crossing(const ColumnGrid& g, const ProjectedTriangle& tri, Emit&&
 
 /// Every crossing, grouped by column (ascending column, then triangle order within a column).
 /// Returns the crossings and, in `starts`, each column's first index (`columns + 1` entries).
-std::vector<Crossing> column_crossings(const track::Positions& p, const track::Triangles& t, const ColumnGrid& g,
-                                       std::size_t grain, std::vector<std::size_t>* starts) {
+std::vector<Crossing> column_crossings(const track::Positions& p, const track::Triangles& t,
+                                       const ColumnGrid& g, std::size_t grain,
+                                       std::vector<std::size_t>* starts) {
   const auto nf = static_cast<std::size_t>(t.rows());
   std::vector<std::size_t> per_triangle(nf + 1, 0);
   parallel_for(nf, grain, [&](std::size_t b, std::size_t e) {
@@ -184,7 +189,8 @@ struct DisjointSets {
   }
   int find(int i) {
     while (parent[static_cast<std::size_t>(i)] != i)
-      i = parent[static_cast<std::size_t>(i)] = parent[static_cast<std::size_t>(parent[static_cast<std::size_t>(i)])];
+      i = parent[static_cast<std::size_t>(i)] =
+          parent[static_cast<std::size_t>(parent[static_cast<std::size_t>(i)])];
     return i;
   }
   void join(int a, int b) { parent[static_cast<std::size_t>(find(a))] = find(b); }
@@ -194,8 +200,10 @@ struct DisjointSets {
 /// (each undirected edge with the net number of times the triangles run it one way), and each
 /// connected piece of it is coned to the centroid of its vertices. The boundary of a boundary is
 /// empty, so the result is closed whatever the holes' shapes (and misoriented pairs, which leave
-/// an edge run twice the same way, are closed too). A closed mesh comes back unchanged.
+/// an edge run twice the same way, are closed too). For a closed mesh `closed` is false and the
+/// arrays stay empty: the caller's mesh is used as it is, without a copy.
 struct ClosedMesh {
+  bool closed{false};
   track::Positions positions;
   track::Triangles triangles;
 };
@@ -207,7 +215,8 @@ ClosedMesh close_borders(const track::Positions& p, const track::Triangles& t) {
     for (int c = 0; c < 3; ++c) {
       const int a = t(f, c), b = t(f, (c + 1) % 3);
       if (a == b) continue;
-      const auto lo = static_cast<std::uint32_t>(std::min(a, b)), hi = static_cast<std::uint32_t>(std::max(a, b));
+      const auto lo = static_cast<std::uint32_t>(std::min(a, b)),
+                 hi = static_cast<std::uint32_t>(std::max(a, b));
       runs.emplace_back(std::uint64_t(lo) << 32 | hi, a < b ? 1 : -1);
     }
   std::sort(runs.begin(), runs.end());
@@ -219,10 +228,12 @@ ClosedMesh close_borders(const track::Positions& p, const track::Triangles& t) {
     if (net != 0) border.emplace_back(runs[k].first, net);
     k = e;
   }
-  ClosedMesh out{p, t};
+  ClosedMesh out;
   if (border.empty()) return out;
+  out = ClosedMesh{true, p, t};
   DisjointSets sets(static_cast<std::size_t>(p.rows()));
-  for (const auto& [key, net] : border) sets.join(static_cast<int>(key >> 32), static_cast<int>(key & 0xffffffffu));
+  for (const auto& [key, net] : border)
+    sets.join(static_cast<int>(key >> 32), static_cast<int>(key & 0xffffffffu));
   std::vector<int> apex_of(static_cast<std::size_t>(p.rows()), -1);
   std::vector<Eigen::Vector3d> sum;
   std::vector<int> count;
@@ -249,11 +260,13 @@ ClosedMesh close_borders(const track::Positions& p, const track::Triangles& t) {
       }
     const int apex_vertex = static_cast<int>(p.rows()) + a;
     for (int n = 0; n < std::abs(net); ++n)  // the cone runs the edge the other way round
-      cones.push_back(net > 0 ? std::array<int, 3>{hi, lo, apex_vertex} : std::array<int, 3>{lo, hi, apex_vertex});
+      cones.push_back(net > 0 ? std::array<int, 3>{hi, lo, apex_vertex}
+                              : std::array<int, 3>{lo, hi, apex_vertex});
   }
   out.positions.conservativeResize(p.rows() + static_cast<Eigen::Index>(sum.size()), 3);
   for (std::size_t a = 0; a < sum.size(); ++a)
-    out.positions.row(p.rows() + static_cast<Eigen::Index>(a)) = (sum[a] / count[a]).cast<float>().transpose();
+    out.positions.row(p.rows() + static_cast<Eigen::Index>(a)) =
+        (sum[a] / count[a]).cast<float>().transpose();
   out.triangles.conservativeResize(t.rows() + static_cast<Eigen::Index>(cones.size()), 3);
   for (std::size_t k = 0; k < cones.size(); ++k)
     out.triangles.row(t.rows() + static_cast<Eigen::Index>(k)) << cones[k][0], cones[k][1], cones[k][2];
@@ -290,7 +303,8 @@ ColumnResult sweep_column(Crossing* begin, Crossing* end, std::vector<char>* mar
       r.twice += len;
       if (marks) {
         for (const Crossing* k : {c, c + 1})  // cone triangles (past the marks) are not the skin's
-          if (static_cast<std::size_t>(k->triangle) < marks->size()) (*marks)[static_cast<std::size_t>(k->triangle)] = 1;
+          if (static_cast<std::size_t>(k->triangle) < marks->size())
+            (*marks)[static_cast<std::size_t>(k->triangle)] = 1;
       }
     }
   }
@@ -303,13 +317,15 @@ SelfOverlap self_overlap(const track::Positions& positions, const track::Triangl
                          const SelfOverlapOptions& options) {
   check_input(positions, triangles, options);
   SelfOverlap out;
-  const ClosedMesh closed = close_borders(positions, triangles);
-  const ColumnGrid g = make_grid(closed.positions, closed.triangles, options.resolution);
+  const ClosedMesh lids = close_borders(positions, triangles);
+  const track::Positions& p = lids.closed ? lids.positions : positions;
+  const track::Triangles& t = lids.closed ? lids.triangles : triangles;
+  const ColumnGrid g = make_grid(p, t, options.resolution);
   out.cell = g.cell;
   out.columns = g.nx * g.ny;
   if (out.columns == 0) return out;
   std::vector<std::size_t> starts;
-  std::vector<Crossing> crossings = column_crossings(closed.positions, closed.triangles, g, options.grain, &starts);
+  std::vector<Crossing> crossings = column_crossings(p, t, g, options.grain, &starts);
   const auto nc = static_cast<std::size_t>(out.columns);
   std::vector<ColumnResult> columns(nc);
   // Marks are written by several columns' sweeps: one byte per triangle per task would cost

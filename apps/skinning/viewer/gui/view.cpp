@@ -10,8 +10,8 @@ namespace isokit::viewer::gui {
 
 namespace {
 
-/// Per-face (interpenetration, intersecting, inverted) or per-vertex (contacts, mask, distance to DQS) colours of
-/// `overlay`; the other set stays empty.
+/// Per-face (interpenetration, intersecting, inverted) or per-vertex (contacts, mask, distance to DQS)
+/// colours of `overlay`; the other set stays empty.
 void overlay_colours(Overlay overlay, const Overlays& o, std::size_t nv, std::size_t nt,
                      skinning::RenderOptions& options) {
   const Eigen::Vector3f base = options.base_color, hot(kOverlayRgb[0], kOverlayRgb[1], kOverlayRgb[2]);

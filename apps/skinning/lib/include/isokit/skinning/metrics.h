@@ -88,9 +88,9 @@ double bbox_diagonal(const track::Positions& positions);
 struct FrameMetrics {
   static constexpr double kNotComputed = std::numeric_limits<double>::quiet_NaN();
 
-  int self_intersections{-1};                 ///< `count_self_intersections`
-  int self_intersections_new{-1};             ///< pairs that are not a rest pair (by identity, not by count)
-  int degenerate_faces{-1};                   ///< `SelfIntersectionDetails::degenerate_count`
+  int self_intersections{-1};      ///< `count_self_intersections`
+  int self_intersections_new{-1};  ///< pairs that are not a rest pair (by identity, not by count)
+  int degenerate_faces{-1};        ///< `SelfIntersectionDetails::degenerate_count`
   /// Interpenetration by volume (self_overlap.h): the volume the skin encloses twice (|winding
   /// number| >= 2), mesh units³.
   double self_overlap{kNotComputed};
@@ -137,11 +137,6 @@ class FrameMetricsEvaluator {
   FrameMetrics evaluate(const track::Positions& posed, bool self_intersections = true,
                         bool self_overlap = true) const;
 
-  /// The triangles that bound a region the posed skin encloses twice and that did not bound one
-  /// at rest (by identity, like `self_intersections_new`), ascending: the overlay of the viewer
-  /// and the renders.
-  std::vector<int> new_overlap_triangles(const track::Positions& posed) const;
-
   /// The rest mesh's volume enclosed twice and once (`self_overlap` at rest).
   const SelfOverlap& rest_overlap() const { return rest_overlap_; }
 
@@ -164,7 +159,7 @@ class FrameMetricsEvaluator {
   std::vector<double> rest_lengths_;
   double rest_volume_{0};
   double rest_diagonal_{0};
-  SelfOverlap rest_overlap_;  ///< with the rest mesh's marked triangles
+  SelfOverlap rest_overlap_;
 };
 
 }  // namespace isokit::skinning

@@ -49,11 +49,11 @@ struct SelfOverlapOptions {
 };
 
 struct SelfOverlap {
-  double overlap{0};   ///< volume where |w| >= 2, mesh units³
-  double enclosed{0};  ///< volume where |w| >= 1, mesh units³
-  double cell{0};      ///< column spacing, mesh units
-  int columns{0};      ///< columns of the grid
-  int open_columns{0}; ///< columns whose crossings still do not sum to 0 after the borders are closed
+  double overlap{0};    ///< volume where |w| >= 2, mesh units³
+  double enclosed{0};   ///< volume where |w| >= 1, mesh units³
+  double cell{0};       ///< column spacing, mesh units
+  int columns{0};       ///< columns of the grid
+  int open_columns{0};  ///< columns whose crossings still do not sum to 0 after the borders are closed
   /// With `mark_triangles`: the triangles whose crossing of some column borders a segment with
   /// |w| >= 2, ascending (the overlay the viewer and the renders colour).
   std::vector<int> overlap_triangles;
