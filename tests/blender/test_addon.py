@@ -6,8 +6,8 @@ away from the origin), animates a 120-degree bend, bakes it with the add-on, and
 (a) the arrays the add-on reads equal those of the same rig exported to glTF and loaded by isokit
     (after the glTF axis conversion and welding), within 1e-6 of the diagonal;
 (b) the add-on's bake equals isokit's bake of those arrays bit for bit;
-(c) end to end, against `isokit-skin bake` of the glTF export: within 1e-5 of the diagonal for dqs
-    and 1e-3 for tracking2014;
+(c) end to end, against `isokit-skin bake` of the glTF export: within 1e-5 of the diagonal for dqs;
+    for tracking2014 within 1e-3 before contacts form and half a mean edge length after;
 and that the Mesh Cache modifier plays the baked frames. Exit status 0 when all hold.
 """
 import math
@@ -196,9 +196,29 @@ def main():
             # Blender's exporter keys frame f at f / fps: isokit samples the clip from t = 0, so the
             # CLI has one more frame (t = 0, holding the first key) before frame 1.
             cli = cli[cli.shape[0] - 25:]
-            err = np.abs(ours_world - cli[:, j]).max() / diag
-            tol = 1e-5 if method == "dqs" else 1e-3
-            check(err <= tol, f"(c) {method}: within {tol:g} of the diagonal of isokit-skin bake (max {err:.2e})")
+            per_frame = np.abs(ours_world - cli[:, j]).max(axis=(1, 2)) / diag
+            if method == "dqs":
+                err = per_frame.max()
+                check(err <= 1e-5, f"(c) dqs: within 1e-05 of the diagonal of isokit-skin bake (max {err:.2e})")
+            else:
+                # The two paths feed the tracker the same rig up to float rounding (vertex order, axis
+                # conversion). Before contacts form that stays below 1e-3 of the diagonal. Once they
+                # form, a contact flag is a yes/no decision that rounding can flip on a vertex, which
+                # moves its smoothed ring by a fraction of an edge (docs/tracking.md, "Reproducibility").
+                contacts = np.array([f["contact_vertices"] for f in skinning.Skinner(loaded).bake(
+                    method, clip=clip, self_intersections=False).metrics()["methods"][method]["frames"]])
+                contacts = contacts[contacts.shape[0] - 25:]
+                free = per_frame[contacts == 0]
+                check(free.size > 0 and free.max() <= 1e-3,
+                      f"(c) {method}: before contacts, within 1e-3 of the diagonal of isokit-skin bake "
+                      f"({free.size} frames, max {free.max():.2e})")
+                rest = loaded.rest
+                edges = np.concatenate([np.linalg.norm(rest[loaded.triangles[:, k]] -
+                                                       rest[loaded.triangles[:, (k + 1) % 3]], axis=1)
+                                        for k in range(3)])
+                err = per_frame.max() * diag / edges.mean()
+                check(err <= 0.5, f"(c) {method}: with contacts, within half a mean edge of isokit-skin bake "
+                      f"(max {err:.2f} edges)")
         # Restore the armature for the next method.
         for m in obj.modifiers:
             if m.type == "ARMATURE":
