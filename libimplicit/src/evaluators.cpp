@@ -17,8 +17,15 @@ namespace isokit::implicit {
 
 namespace {
 
-using tape_detail::highest_bit;
-using tape_detail::lowest_bit;
+/// The lowest / highest set bit of a non-zero leaf mask.
+int lowest_bit(LeafMask m) {
+  const auto lo = std::uint64_t(m);
+  return lo ? tape_detail::lowest_bit(lo) : 64 + tape_detail::lowest_bit(std::uint64_t(m >> 64));
+}
+int highest_bit(LeafMask m) {
+  const auto hi = std::uint64_t(m >> 64);
+  return hi ? 64 + tape_detail::highest_bit(hi) : tape_detail::highest_bit(std::uint64_t(m));
+}
 
 void require_fits(const Program& program, const Pose& pose) {
   if (pose.fits(program)) return;
@@ -29,8 +36,8 @@ void require_fits(const Program& program, const Pose& pose) {
 /// Bit k set when leaf k's local box contains its local point `q_k = R_k^T (p - t_k)`, written to
 /// q (3 rows of `m` floats). `frames`: see Pose::frames. The same operations, in the same order,
 /// as `Rigid3f::apply_inverse` and `Box3f::contains` (the same bits).
-std::uint64_t local_points(const float* frames, std::size_t m, const Vec3f& p, float* q) {
-  std::uint64_t mask = 0;
+LeafMask local_points(const float* frames, std::size_t m, const Vec3f& p, float* q) {
+  LeafMask mask = 0;
   const float* R = frames;
   const float* t = frames + 9 * m;
   const float* lo = frames + 12 * m;
@@ -51,7 +58,7 @@ std::uint64_t local_points(const float* frames, std::size_t m, const Vec3f& p, f
                                    _mm_cmple_ps(qc, _mm_loadu_ps(hi + c * m + k)));
       in = c == 0 ? ok : _mm_and_ps(in, ok);
     }
-    mask |= std::uint64_t(_mm_movemask_ps(in)) << k;
+    mask |= LeafMask(unsigned(_mm_movemask_ps(in))) << k;
   }
 #else
   for (std::size_t k = 0; k < m; ++k) {
@@ -62,7 +69,7 @@ std::uint64_t local_points(const float* frames, std::size_t m, const Vec3f& p, f
       q[c * m + k] = qc;
       in = in & (qc >= lo[c * m + k]) & (qc <= hi[c * m + k]);
     }
-    mask |= std::uint64_t(in) << k;
+    mask |= LeafMask(in) << k;
   }
 #endif
   return mask;
@@ -134,7 +141,7 @@ FieldSample ScalarEvaluator::eval(const Vec3f& p, NodeDiagnostics* diag, bool pr
 SparseEvaluator::SparseEvaluator(const Program& program, const Pose& pose) : program_(program), pose_(pose) {
   // Made once per point by ProgramField::eval: no message is built unless it fails.
   if (!program.sparse())
-    require(false, "program", "is not evaluated sparsely (2 to 63 leaves and a root node are needed)",
+    require(false, "program", "is not evaluated sparsely (2 to 127 leaves and a root node are needed)",
             "use a ScalarEvaluator or a BatchEvaluator");
   require_fits(program, pose);
 }
@@ -142,19 +149,19 @@ SparseEvaluator::SparseEvaluator(const Program& program, const Pose& pose) : pro
 FieldSample SparseEvaluator::eval(const Vec3f& p) const {
   alignas(FieldSample) unsigned char raw[Program::kSparseMaxLeaves * sizeof(FieldSample)];
   FieldSample* samples = reinterpret_cast<FieldSample*>(raw);  // only non-zero leaves are read
-  const std::uint64_t leaves = eval_leaves(p, samples);
+  const LeafMask leaves = eval_leaves(p, samples);
   if (!leaves) return {};
   if (!(leaves & (leaves - 1))) return samples[lowest_bit(leaves)];  // passed through to the root
   return compose(leaves, samples);
 }
 
-std::uint64_t SparseEvaluator::eval_leaves(const Vec3f& p, FieldSample* samples) const {
+LeafMask SparseEvaluator::eval_leaves(const Vec3f& p, FieldSample* samples) const {
   // The point in every leaf's frame, and which leaves' local boxes contain it; only those are
   // evaluated, and only the ones with a non-zero value are kept (a leaf with value 0 is passed
   // over by every node above it, whatever its gradient, as by compose_node).
   const std::size_t m = program_.frame_stride();
   alignas(16) float q[3 * ((Program::kSparseMaxLeaves + 3) / 4 * 4)];  // 3 rows of frame_stride
-  std::uint64_t pending = local_points(pose_.frames().data(), m, p, q), nonzero = 0;
+  LeafMask pending = local_points(pose_.frames().data(), m, p, q), nonzero = 0;
   const std::vector<TapeLeaf>& leaves = pose_.leaves();
   while (pending) {
     const int k = lowest_bit(pending);
@@ -165,12 +172,12 @@ std::uint64_t SparseEvaluator::eval_leaves(const Vec3f& p, FieldSample* samples)
         l.grid.nodes ? eval_grid_inside(l.grid, local) : program_.field(std::size_t(l.field)).eval(local);
     s.gradient = l.local_to_world.rotate(s.gradient);
     samples[k] = s;  // read only when non-zero (no branch: the outcome is data dependent)
-    nonzero |= std::uint64_t(s.value != 0.f) << k;
+    nonzero |= LeafMask(s.value != 0.f) << k;
   }
   return nonzero;
 }
 
-FieldSample SparseEvaluator::compose(std::uint64_t leaves, const FieldSample* samples) const {
+FieldSample SparseEvaluator::compose(LeafMask leaves, const FieldSample* samples) const {
   // `leaves` has two bits or more. The smallest subtree holding them all is rooted at the lowest
   // common ancestor of the leftmost and the rightmost one: its first child holds the leftmost
   // leaf, its second child the rightmost, so both operands are compositions of non-zero leaves.
@@ -179,7 +186,7 @@ FieldSample SparseEvaluator::compose(std::uint64_t leaves, const FieldSample* sa
   const std::size_t count = pose_.leaves().size();
   const TapeSparseNode& node =
       program_.sparse_nodes()[program_.lca()[std::size_t(a) * count + std::size_t(b)]];
-  const std::uint64_t first = leaves & ((std::uint64_t(1) << node.mid) - 1), second = leaves & ~first;
+  const LeafMask first = leaves & ((LeafMask(1) << node.mid) - 1), second = leaves & ~first;
   const FieldSample fa = (first & (first - 1)) ? compose(first, samples) : samples[a];
   const FieldSample fb = (second & (second - 1)) ? compose(second, samples) : samples[b];
   const std::size_t o = std::size_t(node.op);
@@ -220,13 +227,13 @@ void BatchEvaluator::eval_block(const Vec3f* points, std::size_t count, FieldSam
   // the other points, back to back.
   const SparseEvaluator sparse(program_, pose_);
   const std::size_t L = program_.leaves().size(), row = L + 1;
-  std::uint64_t masks[kBlock];
+  LeafMask masks[kBlock];
   std::uint32_t pending[kBlock];
   for (std::size_t j = 0; j < count; ++j) masks[j] = sparse.eval_leaves(points[j], samples_.data() + j * row);
   std::size_t np = 0;
   for (std::size_t j = 0; j < count; ++j) {
-    const std::uint64_t leaves = masks[j];
-    out[j] = samples_[j * row + std::size_t(lowest_bit(leaves | (std::uint64_t(1) << L)))];
+    const LeafMask leaves = masks[j];
+    out[j] = samples_[j * row + std::size_t(lowest_bit(leaves | (LeafMask(1) << L)))];
     pending[np] = std::uint32_t(j);
     np += (leaves & (leaves - 1)) != 0;
   }

@@ -140,8 +140,9 @@ void Pose::update_frames(const Program& program) {
 }
 
 TapeSparseLayout sparse_layout(const Program& program, const Pose& pose) {
-  require(program.sparse(), "program",
-          "is not evaluated sparsely (2 to 63 leaves and a root node are needed)",
+  require(program.sparse() && program.leaves().size() <= Program::kLayoutMaxLeaves, "program",
+          "has no sparse layout (2 to 63 leaves and a root node are needed; it has " +
+              std::to_string(program.leaves().size()) + ")",
           "compose between 2 and 63 primitives");
   require(pose.fits(program), "pose", "was made for another program",
           "make the pose from the program it is used with: Pose(program)");

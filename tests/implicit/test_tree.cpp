@@ -223,16 +223,17 @@ TEST_CASE("deep trees use a heap value stack with the same results", "[tree]") {
   }
 }
 
-TEST_CASE("sparse evaluation equals the reference up to 63 leaves and beyond", "[tree][slow]") {
-  // Trees of up to 63 leaves take the sparse path (leaf boxes tested at once, only nodes with two
-  // non-zero operands composed); larger trees the instruction loop. Both equal the recursive
-  // reference and the instruction loop with pruning bit for bit, point by point and in batches.
+TEST_CASE("sparse evaluation equals the reference up to 127 leaves and beyond", "[tree][slow]") {
+  // Trees of up to 127 leaves take the sparse path (leaf boxes tested at once, only nodes with two
+  // non-zero operands composed; the leaf mask's two words meet at 64); larger trees the
+  // instruction loop. Both equal the recursive reference and the instruction loop with pruning
+  // bit for bit, point by point and in batches.
   test::Rng rng(37);
-  for (const int n : {2, 5, 62, 63, 64}) {
+  for (const int n : {2, 5, 62, 63, 64, 65, 100, 127, 128}) {
     const CompositionTree tree = random_tree(rng, n, false);
     const ProgramField field(tree);
     ScalarEvaluator scalar(field.program(), field.pose());
-    CHECK(field.program().sparse() == (n <= 63));
+    CHECK(field.program().sparse() == (n <= 127));
     std::vector<Vec3f> pts(4001);
     for (auto& p : pts) p = test::to_float(rng.vec(-3.5, 3.5));
     std::vector<FieldSample> batch(pts.size()), serial(pts.size());
@@ -251,6 +252,20 @@ TEST_CASE("sparse evaluation equals the reference up to 63 leaves and beyond", "
       REQUIRE(batch[i].gradient == ref.gradient);
       REQUIRE(serial[i].value == ref.value);
       REQUIRE(serial[i].gradient == ref.gradient);
+    }
+  }
+}
+
+TEST_CASE("a sparse layout (the CUDA tape's) holds up to 63 leaves, the host evaluator more", "[tree]") {
+  test::Rng rng(41);
+  for (const int n : {63, 64}) {
+    const ProgramField field(random_tree(rng, n, false));
+    REQUIRE(field.program().sparse());
+    if (n <= 63) {
+      CHECK(sparse_layout(field.program(), field.pose()).leaves == std::size_t(n));
+    } else {
+      CHECK_THROWS_WITH(sparse_layout(field.program(), field.pose()),
+                        Catch::Contains("64)") && Catch::Contains("between 2 and 63"));
     }
   }
 }
@@ -338,7 +353,7 @@ TEST_CASE("the host/device layout evaluator equals the sparse evaluator bit for 
   const auto cap = std::make_shared<const CapsuleField>(Vec3f{0, 0, 0}, Vec3f{0, 0, 1}, 0.3f);
   const Program single(CompositionTree::leaf(cap, Rigid3f{}, 0));
   const Pose single_pose(single);
-  CHECK_THROWS_WITH(sparse_layout(single, single_pose), Catch::Contains("not evaluated sparsely"));
+  CHECK_THROWS_WITH(sparse_layout(single, single_pose), Catch::Contains("has no sparse layout"));
   CHECK_THROWS_WITH(SparseEvaluator(single, single_pose), Catch::Contains("not evaluated sparsely"));
 }
 

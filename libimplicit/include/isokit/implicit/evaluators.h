@@ -10,7 +10,7 @@
 ///   and jumps past the largest subtree starting there whose box excludes the point (its
 ///   ancestors along first-child links, `TapeInstr::chain_parent`). Pruned subtrees are exactly
 ///   0 with a 0 gradient, so pruning changes no result. Optional per-node diagnostics.
-/// - `SparseEvaluator`: programs of 2 to 63 leaves (`Program::sparse`). The point is taken into
+/// - `SparseEvaluator`: programs of 2 to 127 leaves (`Program::sparse`). The point is taken into
 ///   every leaf's frame at once (SSE2 where available) and tested against the leaf's local box
 ///   (tighter than its world box); only the leaves containing it are evaluated, and only the
 ///   nodes whose two operands are both non-zero are composed: the lowest common ancestor of the
@@ -52,6 +52,9 @@ class ScalarEvaluator {
   std::vector<FieldSample> heap_;
 };
 
+/// One bit per leaf of a sparse program (bit k: leaf k; Program::kSparseMaxLeaves + 1 bits).
+__extension__ typedef unsigned __int128 LeafMask;  // GCC / Clang (64-bit targets)
+
 class SparseEvaluator {
  public:
   /// \throw InputError if the program is not sparse or `pose` was not made for it.
@@ -60,9 +63,9 @@ class SparseEvaluator {
   FieldSample eval(const Vec3f& p) const;
   /// The leaves that are non-zero at `p` (bit k: leaf k), their samples written to `samples[k]`
   /// (`Program::kSparseMaxLeaves` entries; the others are left alone).
-  std::uint64_t eval_leaves(const Vec3f& p, FieldSample* samples) const;
+  LeafMask eval_leaves(const Vec3f& p, FieldSample* samples) const;
   /// The root's value from the non-zero leaves `leaves` (two bits or more) and their samples.
-  FieldSample compose(std::uint64_t leaves, const FieldSample* samples) const;
+  FieldSample compose(LeafMask leaves, const FieldSample* samples) const;
 
  private:
   const Program& program_;

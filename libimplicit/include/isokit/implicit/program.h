@@ -35,8 +35,10 @@ struct TapeInstr {
 
 class Program {
  public:
-  /// Most leaves of a sparse program (one bit per leaf in a 64-bit mask, one spare).
-  static constexpr std::size_t kSparseMaxLeaves = 63;
+  /// Most leaves of a sparse program (one bit per leaf in a 128-bit mask, one spare).
+  static constexpr std::size_t kSparseMaxLeaves = 127;
+  /// Most leaves of a sparse layout (TapeSparseLayout, the CUDA tape: a 64-bit mask, one spare).
+  static constexpr std::size_t kLayoutMaxLeaves = 63;
 
   /// Compiles `tree`. \throw InputError if the tree is deeper than 4096.
   explicit Program(const CompositionTree& tree);
