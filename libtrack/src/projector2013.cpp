@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <utility>
 
@@ -85,6 +86,14 @@ Projector2013::Projector2013(const Positions& rest, const Triangles& triangles,
           "use a negative value for the paper's μ or a constant in [0, 1]");
   require(options_.contact_angle_deg > 0.f && options_.contact_angle_deg <= 180.f,
           "ProjectorOptions::contact_angle_deg", "must be in (0, 180]", "use 55 (2013)");
+  require(options_.stall_steps >= 0 && options_.stall_steps <= 255, "ProjectorOptions::stall_steps",
+          "must be in [0, 255]", "use 3, or 0 for none (2013)");
+  require(options_.progress > 0.f && options_.progress <= 1.f, "ProjectorOptions::progress", "must be in (0, 1]",
+          "use 0.9");
+  require(options_.secant_max_factor > 0.f && options_.secant_max_factor <= 1.f,
+          "ProjectorOptions::secant_max_factor", "must be in (0, 1]", "use 0.7");
+  require(std::isfinite(options_.tolerance) && options_.tolerance >= 0.f, "ProjectorOptions::tolerance",
+          "must be >= 0 (field units)", "use 1e-4");
   require(static_cast<bool>(rest_field), "rest field", "is empty", "pass a field function");
   require(rest_.rows() > 0, "rest positions", "are empty", "pass a mesh with vertices");
   const std::vector<Vec3f> pts = detail::to_points(rest_, "rest positions");
@@ -125,121 +134,214 @@ void Projector2013::relax(const std::vector<Vec3f>& normals, float mu, Positions
 
 namespace {
 
+/// Why a vertex stopped moving in the call (contact and lost are VertexFlags).
+enum class Stop : std::uint8_t { kLive, kDone, kStalled, kContact, kLost };
+
 /// The working arrays of one project() call.
 struct ProjectionBuffers {
   explicit ProjectionBuffers(std::vector<Vec3f> initial)
       : cur(std::move(initial)),
-        next(cur.size()),
-        grads(cur.size()),
+        prev(cur.size()),
         normal(cur.size(), Vec3f{}),
         batch(cur.size()),
+        grads(cur.size()),
+        moved(cur.size()),
+        slot_values(cur.size()),
+        slot_contact(cur.size()),
+        field_contact(cur.size(), 0),
         values(cur.size()),
-        resid(cur.size(), 0.f),
-        fc(cur.size()),
-        done(cur.size(), 0),
+        signed_resid(cur.size(), 0.f),
+        best(cur.size(), std::numeric_limits<float>::infinity()),
+        sigma(cur.size(), 0.f),
+        stop(cur.size(), Stop::kLive),
+        strikes(cur.size(), 0),
+        stale(cur.size(), 1),
         live(cur.size()) {
     for (std::size_t i = 0; i < live.size(); ++i) live[i] = static_cast<int>(i);
   }
-  std::vector<Vec3f> cur, next, grads, normal, batch;
-  std::vector<float> values, resid;
-  std::vector<std::uint8_t> fc, done;
-  /// The vertices still projected: a vertex stopped at a contact or lost keeps its position for
-  /// the rest of the call, so its field is not evaluated again (the same result, fewer
-  /// evaluations). `batch` holds their positions, gathered per iteration.
+  std::vector<Vec3f> cur;
+  std::vector<Vec3f> prev;    ///< where each vertex was at its last evaluation
+  std::vector<Vec3f> normal;  ///< unit gradient of the last evaluation (contact rule)
+  std::vector<Vec3f> batch, grads, moved;  ///< per live slot
+  std::vector<float> slot_values;          ///< per live slot
+  std::vector<std::uint8_t> slot_contact;  ///< per live slot: the field's contact flag
+  std::vector<std::uint8_t> field_contact;  ///< the field's contact flag at the last evaluation
+  std::vector<float> values;        ///< f at the last evaluation
+  std::vector<float> signed_resid;  ///< iso - f at the last evaluation
+  std::vector<float> best;          ///< smallest |iso - f| of the call (progress rule)
+  std::vector<float> sigma;         ///< the factor of the last Newton step (0: none yet, or a secant step)
+  std::vector<Stop> stop;
+  std::vector<std::uint8_t> strikes;  ///< consecutive Newton steps without progress
+  std::vector<std::uint8_t> stale;    ///< moved since its last evaluation
+  /// The vertices still moving, in index order: the field is evaluated at these only (a stopped
+  /// vertex keeps its position, so its value is known).
   std::vector<int> live;
+  bool relaxed{false};  ///< a relaxation step ran since the last Newton step
 };
 
-/// One Newton step of every live vertex (2013 eq. 4, sign so that f moves toward iso with inward
-/// gradients); a vertex whose gradient turned by more than the contact angle stops (contact), one
-/// without a usable gradient is lost. The stopped vertices leave `live`.
-void newton_step(const FieldFunction& field, const ProjectorOptions& o, const std::vector<float>& iso,
-                 const std::vector<float>& max_step, VertexFlags& flags, ProjectionBuffers& s) {
-  const float cos_contact = std::cos(o.contact_angle_deg * kPiF / 180.f);
-  const float min_g2 = o.min_gradient * o.min_gradient;
-  s.next = s.cur;
-  parallel_for(s.live.size(), o.grain, [&](std::size_t b, std::size_t e) {
-    for (std::size_t k = b; k < e; ++k) s.batch[k] = s.cur[static_cast<std::size_t>(s.live[k])];
-    detail::eval_field(field, s.batch.data() + b, e - b, s.values.data() + b, s.grads.data() + b,
-                       s.fc.data() + b, 0);
-    for (std::size_t k = b; k < e; ++k) {
-      const auto i = static_cast<std::size_t>(s.live[k]);
-      const Vec3f g = s.grads[k];
-      const float value = s.values[k];
-      const float g2 = squared_norm(g);
-      if (!std::isfinite(value) || !detail::finite(g) || !(g2 > min_g2)) {
-        flags.lost[i] = 1;
-        continue;
-      }
-      const Vec3f nrm = g / std::sqrt(g2);
-      if (s.normal[i] != Vec3f{} && dot(nrm, s.normal[i]) < cos_contact) {
-        flags.contact[i] = 1;  // stopped at a gradient discontinuity
-        continue;
-      }
-      s.normal[i] = nrm;
-      s.resid[i] = std::abs(iso[i] - value);
-      s.done[i] = s.resid[i] <= o.tolerance;
-      Vec3f step = g * (o.sigma * (iso[i] - value) / g2);
-      const float len = norm(step);
-      if (len > max_step[i]) step = step * (max_step[i] / len);
-      s.next[i] = s.cur[i] + step;
-    }
-  });
-  s.cur.swap(s.next);
-  const auto stopped = [&](int i) {
-    return flags.contact[static_cast<std::size_t>(i)] || flags.lost[static_cast<std::size_t>(i)];
-  };
-  s.live.erase(std::remove_if(s.live.begin(), s.live.end(), stopped), s.live.end());
+/// The Newton step factor of a vertex (ProjectorOptions::secant): σ (2013 eq. 4) until two samples
+/// along one step show how the field falls along it; then the factor that the secant of those
+/// samples says reaches the iso-value, within [σ, secant_max_factor]: a step with factor σ_k that took the
+/// residual from `last` to `d` (same sign) measured the slope as (1 - d / last) / σ_k of the
+/// gradient's. Without two such samples (a relaxation between, or no progress) the last factor
+/// is kept, or σ.
+float step_factor(const ProjectorOptions& o, bool paired, float d, float last, float previous) {
+  if (!o.secant) return o.sigma;
+  if (!paired) return previous > 0.f ? previous : o.sigma;
+  const float rho = d / last;
+  if (!(rho > 0.f && rho < 1.f)) return o.sigma;
+  return std::clamp(previous / (1.f - rho), o.sigma, std::max(o.sigma, o.secant_max_factor));
 }
 
-/// MVC tangential relaxation (2013 eq. 5, 6) of the vertices still projected, with the paper's
-/// μ(|f - iso|) unless ProjectorOptions::mu is set.
-void relaxation_step(const Adjacency& adj, const std::vector<float>& phi, const ProjectorOptions& o,
-                     const VertexFlags& flags, ProjectionBuffers& s) {
-  parallel_for(s.cur.size(), o.grain, [&](std::size_t b, std::size_t e) {
-    for (std::size_t i = b; i < e; ++i) {
-      s.next[i] = s.cur[i];
-      if (flags.contact[i] || flags.lost[i] || s.normal[i] == Vec3f{}) continue;
-      float mu = o.mu;
-      if (mu < 0.f) {
-        const float r = s.resid[i] - 1.f;
-        mu = std::max(0.f, 1.f - r * r * r * r);
-      }
-      s.next[i] = mvc_relaxed(adj, phi, s.cur, i, s.normal[i], mu);
+/// The move of a live vertex after its evaluation (f, g): none when a rule stops it (its reason
+/// in `s.stop`), else the Newton step of eq. 4 — or the secant point when the residual changed
+/// sign since the last step (ProjectorOptions::secant).
+Vec3f newton_move(const ProjectorOptions& o, float iso, float max_step, std::size_t i, float value, const Vec3f& g,
+                  ProjectionBuffers& s) {
+  const float g2 = squared_norm(g);
+  if (!std::isfinite(value) || !detail::finite(g) || !(g2 > o.min_gradient * o.min_gradient)) {
+    s.stop[i] = Stop::kLost;
+    return {};
+  }
+  const Vec3f nrm = g / std::sqrt(g2);
+  if (s.normal[i] != Vec3f{} && dot(nrm, s.normal[i]) < std::cos(o.contact_angle_deg * kPiF / 180.f)) {
+    s.stop[i] = Stop::kContact;  // stopped at a gradient discontinuity (2013 §5)
+    return {};
+  }
+  s.normal[i] = nrm;
+  const float d = iso - value, r = std::abs(d);
+  const float last = s.signed_resid[i];
+  const bool paired = o.secant && !s.relaxed && s.sigma[i] > 0.f;  // two samples along the last step
+  s.signed_resid[i] = d;
+  if (r <= o.tolerance) {
+    s.stop[i] = Stop::kDone;
+    return {};
+  }
+  if (r < o.progress * s.best[i]) {
+    s.best[i] = r;
+    s.strikes[i] = 0;
+  } else if (o.stall_steps > 0 && ++s.strikes[i] >= o.stall_steps) {
+    s.stop[i] = Stop::kStalled;
+    return {};
+  }
+  s.best[i] = std::min(s.best[i], r);
+  if (paired && d * last < 0.f) {  // bracketed: the secant's zero between the two samples
+    s.sigma[i] = 0.f;
+    return (s.prev[i] - s.cur[i]) * (d / (d - last));
+  }
+  s.sigma[i] = step_factor(o, paired, d, last, s.sigma[i]);
+  Vec3f step = g * (s.sigma[i] * d / g2);
+  const float len = norm(step);
+  if (len > max_step) step = step * (max_step / len);
+  return step;
+}
+
+/// One Newton step of every live vertex (2013 eq. 4): the field evaluated in batches of live
+/// vertices, each vertex moved or stopped (newton_move); the stopped ones leave `live`.
+/// Returns the field evaluations made.
+long newton_step(const FieldFunction& field, const ProjectorOptions& o, const std::vector<float>& iso,
+                 const std::vector<float>& max_step, ProjectionBuffers& s) {
+  const std::size_t m = s.live.size();
+  parallel_for(m, o.grain, [&](std::size_t b, std::size_t e) {
+    for (std::size_t k = b; k < e; ++k) s.batch[k] = s.cur[static_cast<std::size_t>(s.live[k])];
+    detail::eval_field(field, s.batch.data() + b, e - b, s.slot_values.data() + b, s.grads.data() + b,
+                       s.slot_contact.data() + b, 0);
+    for (std::size_t k = b; k < e; ++k) {
+      const auto i = static_cast<std::size_t>(s.live[k]);
+      s.values[i] = s.slot_values[k];
+      s.field_contact[i] = s.slot_contact[k];
+      s.moved[k] = newton_move(o, iso[i], max_step[i], i, s.values[i], s.grads[k], s);
     }
   });
-  s.cur.swap(s.next);
+  for (std::size_t k = 0; k < m; ++k) {
+    const auto i = static_cast<std::size_t>(s.live[k]);
+    s.stale[i] = 0;
+    s.prev[i] = s.cur[i];
+    if (s.stop[i] == Stop::kLive) {
+      s.cur[i] += s.moved[k];
+      s.stale[i] = 1;
+    }
+  }
+  s.live.erase(std::remove_if(s.live.begin(), s.live.end(),
+                              [&](int i) { return s.stop[static_cast<std::size_t>(i)] != Stop::kLive; }),
+               s.live.end());
+  s.relaxed = false;
+  return static_cast<long>(m);
+}
+
+/// MVC tangential relaxation (2013 eq. 5, 6) of the live vertices, with the paper's μ(|f - iso|)
+/// unless ProjectorOptions::mu is set. Stopped vertices hold their place.
+void relaxation_step(const Adjacency& adj, const std::vector<float>& phi, const ProjectorOptions& o,
+                     ProjectionBuffers& s) {
+  const std::size_t m = s.live.size();
+  parallel_for(m, o.grain, [&](std::size_t b, std::size_t e) {
+    for (std::size_t k = b; k < e; ++k) {
+      const auto i = static_cast<std::size_t>(s.live[k]);
+      s.moved[k] = s.cur[i];
+      float mu = o.mu;
+      if (mu < 0.f) {
+        const float r = std::abs(s.signed_resid[i]) - 1.f;
+        mu = std::max(0.f, 1.f - r * r * r * r);
+      }
+      s.moved[k] = mvc_relaxed(adj, phi, s.cur, i, s.normal[i], mu);
+    }
+  });
+  for (std::size_t k = 0; k < m; ++k) s.cur[static_cast<std::size_t>(s.live[k])] = s.moved[k];
+  s.relaxed = m > 0;
 }
 
 }  // namespace
-
 TrackStats Projector2013::project(const FieldFunction& field, Positions& positions) {
   const auto t0 = std::chrono::steady_clock::now();
   const std::size_t n = iso_.size();
   detail::validate_call(positions, n, field);
   ProjectionBuffers s(detail::to_points(positions, "initial positions"));
-  flags_.contact.assign(n, 0);
-  flags_.lost.assign(n, 0);
 
   TrackStats stats;
-  for (int it = 0; it < options_.max_iterations; ++it) {
-    newton_step(field, options_, iso_, max_step_, flags_, s);
+  for (int it = 0; it < options_.max_iterations && !s.live.empty(); ++it) {
+    stats.vertex_updates += static_cast<long>(s.live.size());
+    stats.field_evaluations += newton_step(field, options_, iso_, max_step_, s);
     stats.iterations = it + 1;
-    bool all = true;
-    for (std::size_t i = 0; i < n; ++i) all = all && (s.done[i] || flags_.contact[i] || flags_.lost[i]);
-    if (all) {
-      stats.converged = true;
-      break;
-    }
     // A relaxation after every pair of Newton steps (2013 §5).
-    if (it % 2 == 1) relaxation_step(adj_, phi_, options_, flags_, s);
+    if (it % 2 == 1) relaxation_step(adj_, phi_, options_, s);
   }
-  if (options_.max_iterations == 0) stats.converged = true;
+  stats.converged = s.live.empty() || options_.max_iterations == 0;
+  flags_.contact.assign(n, 0);
+  flags_.lost.assign(n, 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    flags_.contact[i] = s.stop[i] == Stop::kContact;
+    flags_.lost[i] = s.stop[i] == Stop::kLost;
+    stats.stalled_vertices += s.stop[i] == Stop::kStalled;
+  }
   stats.smoothed_vertices =
       detail::contact_smoothing(adj_, flags_.contact, options_.smoothing, options_.grain, s.cur, flags_.beta);
-  detail::final_stats(field, s.cur, triangles_, iso_, options_.grain, flags_, stats);
+  finish_statistics(field, s.cur, s.stale, s.values, s.field_contact, stats);
   detail::from_points(s.cur, positions);
   stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return stats;
+}
+
+void Projector2013::finish_statistics(const FieldFunction& field, const std::vector<Vec3f>& pts,
+                                      const std::vector<std::uint8_t>& stale, std::vector<float>& values,
+                                      std::vector<std::uint8_t>& field_contact, TrackStats& stats) {
+  std::vector<int> redo;  // moved since their last evaluation (or never evaluated): evaluated again
+  for (std::size_t i = 0; i < pts.size(); ++i)
+    if (stale[i] || flags_.beta[i] > 0.f) redo.push_back(static_cast<int>(i));
+  std::vector<Vec3f> p(redo.size()), g(redo.size());
+  std::vector<float> v(redo.size());
+  std::vector<std::uint8_t> c(redo.size());
+  for (std::size_t a = 0; a < redo.size(); ++a) p[a] = pts[static_cast<std::size_t>(redo[a])];
+  detail::eval_field(field, p.data(), p.size(), v.data(), g.data(), c.data(), options_.grain);
+  for (std::size_t a = 0; a < redo.size(); ++a) {
+    values[static_cast<std::size_t>(redo[a])] = v[a];
+    field_contact[static_cast<std::size_t>(redo[a])] = c[a];
+  }
+  for (std::size_t i = 0; i < pts.size(); ++i)  // contacts the field reports at the final positions
+    if (field_contact[i]) flags_.contact[i] = 1;
+  detail::vertex_stats(values, iso_, flags_, stats);
+  if (options_.count_inverted)
+    stats.inverted_triangles =
+        detail::count_flags(detail::inverted_triangles(field, pts, triangles_, options_.grain));
 }
 
 }  // namespace isokit::track

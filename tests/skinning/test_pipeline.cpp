@@ -280,6 +280,15 @@ TEST_CASE("pipeline: bad input to the skinner is rejected naming the item", "[sk
   CHECK(fr.tracker.fold_repair.rings == 1);
   CHECK_THROWS_WITH(setup_from_json(R"({"tracker": {"fold_repair_rings": -1}})", "s.json"),
                     Catch::Contains("s.json.tracker.fold_repair") && Catch::Contains(">= 0"));
+  const SkinSetup pr = setup_from_json(
+      R"({"projector": {"stall_steps": 5, "progress": 0.8, "secant": false, "secant_max_factor": 1}})", "s.json");
+  CHECK(pr.projector.stall_steps == 5);
+  CHECK(pr.projector.progress == 0.8f);
+  CHECK_FALSE(pr.projector.secant);
+  CHECK(pr.projector.secant_max_factor == 1.f);
+  for (const char* bad : {R"({"projector": {"stall_steps": -1}})", R"({"projector": {"progress": 1.5}})",
+                          R"({"projector": {"secant_max_factor": 0}})"})
+    CHECK_THROWS_WITH(setup_from_json(bad, "s.json"), Catch::Contains("s.json.projector."));
   CHECK(s.tracker.orientation_repair.rounds == 8);
   CHECK(s.bulge_gate);
   CHECK_FALSE(setup_from_json(R"({"operators": {"bulge_gate": false}})", "s.json").bulge_gate);
@@ -348,6 +357,8 @@ TEST_CASE("setup: the paper preset turns every isokit addition off, later keys o
   CHECK(d.axis_guard);
   CHECK(d.bulge_gate);
   CHECK(d.substeps.fold_rule);
+  CHECK(d.projector.stall_steps > 0);
+  CHECK(d.projector.secant);
   const SkinSetup p = setup_from_json(R"({"preset": "paper"})", "s.json");
   CHECK(p.tracker.chebyshev_rho == 0.f);
   CHECK(!p.tracker.active_set);
@@ -364,6 +375,9 @@ TEST_CASE("setup: the paper preset turns every isokit addition off, later keys o
   CHECK(!p.bulge_gate);
   CHECK(p.substeps.paper_rule);
   CHECK(!p.substeps.fold_rule);
+  CHECK(p.projector.stall_steps == 0);
+  CHECK(!p.projector.secant);
+  CHECK(p.projector.tolerance == 1e-4f);
   CHECK(p.fit.closure == isokit::implicit::PartFitOptions::Closure::joints);
   CHECK(p.max_fit_error == 0.0);
   CHECK(p.capsule_match == 0.0);

@@ -376,8 +376,8 @@ const std::vector<std::uint8_t>* deform(const Skinner& sk, Method method, BakeSt
       st.capped_calls = ts.converged ? 0 : 1;
       st.call_iterations = {ts.iterations};
       st.iterations = ts.iterations;
-      st.vertex_updates = double(rig.rest.rows()) * ts.iterations;
-      st.field_evaluations = st.vertex_updates;
+      st.vertex_updates = double(ts.vertex_updates);
+      st.field_evaluations = double(ts.field_evaluations);
       st.lost_vertices = ts.lost_vertices;
       return &s.projector->flags().contact;
     }
@@ -405,6 +405,7 @@ void start_bake(Skinner& sk, Method method, const BakeOptions& options, BakeStat
     s.field->set_pose(skinning_matrices(rig, rest));
     track::ProjectorOptions po = setup.projector;
     po.grain = options.grain;
+    po.count_inverted = false;  // the metrics count inverted triangles
     s.projector = std::make_unique<track::Projector2013>(rig.rest, rig.triangles, s.field->function(), po);
   }
   s.current = rig.rest;

@@ -451,7 +451,7 @@ void read_tracker(const json& t, const std::string& w, SkinSetup& s) {
 void read_projector(const json& p, const std::string& w, track::ProjectorOptions& projector) {
   check_keys(p,
              {"sigma", "max_iterations", "contact_angle_deg", "tolerance", "smoothing_steps",
-              "beta_diffusion_steps"},
+              "beta_diffusion_steps", "stall_steps", "progress", "secant", "secant_max_factor"},
              w);
   read(p, "sigma", projector.sigma, w);
   read(p, "max_iterations", projector.max_iterations, w);
@@ -459,6 +459,15 @@ void read_projector(const json& p, const std::string& w, track::ProjectorOptions
   read(p, "tolerance", projector.tolerance, w);
   read(p, "smoothing_steps", projector.smoothing.smoothing_steps, w);
   read(p, "beta_diffusion_steps", projector.smoothing.beta_diffusion_steps, w);
+  read(p, "stall_steps", projector.stall_steps, w);
+  require(projector.stall_steps >= 0 && projector.stall_steps <= 255, w + ".stall_steps",
+          "must be in [0, 255] (got " + std::to_string(projector.stall_steps) + ")", "use 3, or 0 for none (2013)");
+  read(p, "progress", projector.progress, w);
+  require(projector.progress > 0.f && projector.progress <= 1.f, w + ".progress", "must be in (0, 1]", "use 0.9");
+  read(p, "secant", projector.secant, w);
+  read(p, "secant_max_factor", projector.secant_max_factor, w);
+  require(projector.secant_max_factor > 0.f && projector.secant_max_factor <= 1.f, w + ".secant_max_factor",
+          "must be in (0, 1]", "use 0.7");
 }
 
 /// Section `mask`: where the rig file keeps the relaxation mask (MaskSource).
@@ -582,6 +591,9 @@ void apply_paper_preset(SkinSetup& s) {
   s.bulge_gate = false;
   s.substeps.paper_rule = true;
   s.substeps.fold_rule = false;
+  s.projector.stall_steps = 0;
+  s.projector.secant = false;
+  s.projector.tolerance = 1e-4f;
 }
 
 SkinSetup setup_from_json(const std::string& text, const std::string& source, const std::string& base_dir) {

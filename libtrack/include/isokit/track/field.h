@@ -37,10 +37,11 @@ enum class TrackInterrupt { kContinue, kStop, kAbandon };
 struct TrackStats {
   int iterations{0};  ///< relaxation iterations (2014: Jacobi + Newton; 2013: Newton steps)
   /// Vertex updates of the relaxation (2014 tracker: the sum of the active-set sizes over its
-  /// iterations, at most `iterations * #V`; 2013 projector: 0).
+  /// iterations, at most `iterations * #V`; 2013 projector: the Newton steps taken, summed over
+  /// the vertices still moving).
   long vertex_updates{0};
-  /// Field evaluations of the Newton and relaxation iterations (2014 tracker; fewer than the
-  /// vertex updates with lazy evaluation; the final statistics' evaluations are not counted).
+  /// Field evaluations of the Newton and relaxation iterations (fewer than the vertex updates with
+  /// the 2014 tracker's lazy evaluation; the final statistics' evaluations are not counted).
   long field_evaluations{0};
   /// CG iterations summed over the relaxation (kConjugateGradient; kGlobal: the preconditioned CG
   /// iterations of its tangential solves, 0 for a solve by a fresh factorisation)
@@ -64,8 +65,12 @@ struct TrackStats {
   int smoothed_vertices{0};   ///< vertices with diffused beta > 0 (moved by contact smoothing)
   int oriented_vertices{0};   ///< vertices moved by the orientation repair (2014 tracker)
   int lost_vertices{0};       ///< zero / non-finite gradient: left in place (e.g. outside the support)
+  /// 2013 projector: vertices stopped for making no progress (ProjectorOptions::stall_steps)
+  int stalled_vertices{0};
   int free_vertices{0};       ///< not held to their iso-value (VertexFlags::free; 2014 tracker)
-  int inverted_triangles{0};  ///< triangles whose normal points along +∇f at their centroid
+  /// triangles whose normal points along +∇f at their centroid (2013 projector: 0 unless
+  /// ProjectorOptions::count_inverted)
+  int inverted_triangles{0};
   double seconds{0};          ///< wall time of the call
 };
 

@@ -18,15 +18,42 @@
 namespace isokit::track {
 
 struct ProjectorOptions {
-  float sigma{0.35f};              ///< 2013 §5
-  float contact_angle_deg{55.0f};  ///< 2013 §5
-  int max_iterations{50};          ///< Newton steps per call
-  float tolerance{1e-4f};          ///< stop when every active |f - iso| is below this
-  float max_step{0.5f};            ///< Newton step ≤ max_step * mean rest edge length
-  float mu{-1.0f};                 ///< < 0: the paper's μ(|f - iso|); ≥ 0: this constant
-  float min_gradient{1e-6f};
-  SmoothingOptions smoothing{};
-  std::size_t grain{1024};
+  float sigma{0.35f};              ///< Newton step factor σ of eq. 4 (2013 §5: 0.35)
+  float contact_angle_deg{55.0f};  ///< gradient turn between two steps that stops a vertex (2013 §5: 55°)
+  /// Newton steps per call, the cap (2013 §5 gives none; isokit: 50). A call ends before it when
+  /// every vertex has stopped by one of the rules below.
+  int max_iterations{50};
+  /// A vertex is at its iso-value when |f - iso| ≤ tolerance (field units); it then stops: it is
+  /// neither evaluated nor relaxed again in the call (2013 §5 projects each vertex onto its
+  /// iso-value; the relaxation's μ of eq. 6 is ≈ 4 |f - iso|, i.e. ≈ 0, there). Default 1e-3,
+  /// the 2014 tracker's TrackerOptions::iso_tolerance (the `paper` preset: 1e-4; the paper gives
+  /// none; docs/decisions/projector-stopping-rules.md).
+  float tolerance{1e-3f};
+  float max_step{0.5f};  ///< a Newton step is at most max_step × the vertex's mean rest edge length
+  /// < 0: the paper's μ(|f - iso|) of eq. 6; ≥ 0: this constant (a stopped vertex is not relaxed).
+  float mu{-1.0f};
+  float min_gradient{1e-6f};  ///< |∇f| at or below this: no usable gradient, the vertex is lost
+  /// No progress: a vertex whose residual |f - iso| has not fallen below `progress` × its smallest
+  /// residual of the call for `stall_steps` consecutive Newton steps stops where it is
+  /// (TrackStats::stalled_vertices): it oscillates across a seam of the composed field or is held
+  /// by the relaxation. 0 = never (the `paper` preset: only the cap stops it). Default 3 steps,
+  /// progress 0.9: an undisturbed σ = 0.35 Newton step divides the residual by ≈ 1.5.
+  int stall_steps{3};
+  float progress{0.9f};  ///< see stall_steps; in (0, 1]
+  /// Secant-corrected steps (isokit; off in the `paper` preset: every step uses σ). Two
+  /// consecutive samples of a vertex with no relaxation between them show how the field falls
+  /// along the step: when the residual kept its sign, the next steps use the factor that reaches
+  /// the iso-value on that secant, within [σ, secant_max_factor]; when it changed sign, the
+  /// iso-value is bracketed and the vertex moves to the secant's zero between the two samples.
+  bool secant{true};
+  /// Largest Newton step factor of a secant-corrected step, in (0, 1] (below σ: σ). Default 0.7: measured
+  /// on the real rigs against 0.5 and 1 (docs/decisions/projector-stopping-rules.md).
+  float secant_max_factor{0.7f};
+  /// TrackStats::inverted_triangles counted (one field evaluation per triangle at the end of the
+  /// call). Off: it stays 0 (the skinning pipeline measures inverted triangles in its metrics).
+  bool count_inverted{true};
+  SmoothingOptions smoothing{};  ///< β-diffused Laplacian smoothing after the projection (2013 eq. 7)
+  std::size_t grain{1024};       ///< vertices per parallel task (0: serial)
 };
 
 class Projector2013 {
@@ -47,6 +74,13 @@ class Projector2013 {
   const Adjacency& adjacency() const { return adj_; }
 
  private:
+  /// The call's residual statistics from each vertex's last value and field contact flag; the
+  /// vertices moved since (`stale`, or smoothed) are evaluated again. Contacts the field reports
+  /// at the final positions join flags().contact. Inverted triangles: ProjectorOptions::count_inverted.
+  void finish_statistics(const FieldFunction& field, const std::vector<Vec3f>& pts,
+                         const std::vector<std::uint8_t>& stale, std::vector<float>& values,
+                         std::vector<std::uint8_t>& field_contact, TrackStats& stats);
+
   Positions rest_;
   Triangles triangles_;
   std::vector<float> iso_;
