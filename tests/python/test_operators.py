@@ -145,21 +145,35 @@ def test_save_and_load_round_trip(tmp_path):
 
 
 def test_generate_releases_the_gil():
-    spec = small_spec(resolution=32)
+    # A thread records when it runs; generate() holds no GIL if that thread runs during a call.
+    # A loaded machine may not schedule it during one call, so up to 20 calls are made: with the
+    # GIL held, a call could see at most the ticks of its entry and its exit (two switches).
+    import time
+
+    spec = small_spec(resolution=64)
     ticks = []
-    done = threading.Event()
+    started, done = threading.Event(), threading.Event()
 
     def count():
+        started.set()
         while not done.is_set():
-            ticks.append(1)
+            ticks.append(time.monotonic())
             done.wait(0.001)
 
     t = threading.Thread(target=count)
     t.start()
-    ops.generate(spec)
+    started.wait()
+    inside = 0
+    for _ in range(20):
+        t0 = time.monotonic()
+        ops.generate(spec)
+        t1 = time.monotonic()
+        inside = max(inside, sum(1 for x in list(ticks) if t0 < x < t1))
+        if inside >= 3:
+            break
     done.set()
     t.join()
-    assert len(ticks) > 1
+    assert inside >= 3
 
 
 def test_ctrl_c_interrupts_a_long_call():
