@@ -31,11 +31,15 @@ demo: build
 	$(BUILD)/apps/skinning/isokit-skin demo --out $(DEMO_OUT)
 
 # The real-rig evaluation: every clip of every rig in ../shared/data/rigs (and Fox), plus an
-# elbow/knee bend-and-return, with dqs, implicit2013 and tracking2014; writes $(EVAL_OUT)/
-# (eval.json, eval.md, per-rig metrics and contact sheets). Quick run: EVAL_ARGS="--max-frames 10";
-# docs/skinning-real-rigs.md.
+# elbow/knee bend-and-return, with dqs, ddm, cor, implicit2013 and tracking2014; writes
+# $(EVAL_OUT)/ (eval.json, eval.md, per-rig metrics and contact sheets), then scores the implicit
+# methods against the best geometric method of each row (bench/eval/score_vs_geometric.py, when
+# ../shared/tools is there; $(EVAL_OUT)/score_vs_geometric.json). Quick run:
+# EVAL_ARGS="--max-frames 10"; docs/skinning-real-rigs.md.
 eval: build
 	$(BUILD)/bench/isokit-eval --out $(EVAL_OUT) --commit "$$(git rev-parse --short HEAD 2>/dev/null)" $(EVAL_ARGS)
+	@if [ -f ../shared/tools/judge_vs_dqs.py ]; then \
+	  python3 bench/eval/score_vs_geometric.py $(EVAL_OUT) --tools ../shared/tools --json $(EVAL_OUT)/score_vs_geometric.json; fi
 
 # All tests of the Release build (unit, slow, gpu — skipped without a device — and the
 # find_package consumer), then the unit tests again under ASan + UBSan.

@@ -36,7 +36,7 @@ void add_options(CLI::App& app, isokit::eval::EvalOptions& a) {
 
 int main(int argc, char** argv) {
   CLI::App app{
-      "isokit-eval: every clip of every rig, plus elbow/knee bend-and-return, with dqs, "
+      "isokit-eval: every clip of every rig, plus elbow/knee bend-and-return, with dqs, ddm, cor, "
       "implicit2013 and tracking2014 (docs/skinning-real-rigs.md)"};
   isokit::eval::EvalOptions options;
   add_options(app, options);

@@ -22,7 +22,8 @@ struct EvalOptions {
   std::vector<std::string> folders;  ///< every .glb/.gltf/.fbx/.dae of these (sorted)
   std::vector<std::string> only;     ///< keep the rigs whose path contains one of these
   std::vector<std::string> clips;    ///< keep these animations ("bend" = the bend-and-return)
-  std::vector<std::string> methods{"dqs", "implicit2013", "tracking2014"};
+  /// The geometric methods (the bar: dqs, and the best of dqs, ddm, cor) and the implicit ones.
+  std::vector<std::string> methods{"dqs", "ddm", "cor", "implicit2013", "tracking2014"};
   int max_frames{0};  ///< first frames of each clip (0 = all; the bend-and-return is not cut)
   int bend_frames{31};
   double bend_degrees{120};

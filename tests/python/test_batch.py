@@ -19,6 +19,9 @@ def write_manifest(folder, bad_rig):
             jobs.append({"name": name, "method": method, "bends": [f"Bone1:x:{degrees}"],
                          "outputs": {"pc2": f"out/{name}.pc2", "glb": f"out/{name}.glb", "metrics": f"out/{name}.json"}})
     jobs.append({"name": "lbs-clip-free", "method": "lbs", "bends": ["Bone1:z:30"], "outputs": {"pc2": "out/lbs.pc2"}})
+    for method in ("ddm", "cor"):
+        jobs.append({"name": f"{method}-40", "method": method, "bends": ["Bone1:x:40"],
+                     "outputs": {"pc2": f"out/{method}.pc2", "metrics": f"out/{method}.json"}})
     jobs.append({"name": "bad-file", "rig": bad_rig, "method": "dqs", "outputs": {"pc2": "out/bad.pc2"}})
     manifest = {"format": "isokit-batch", "version": 1,
                 "defaults": {"rig": "procedural:cylinder?vertices=1000", "frames": 5}, "jobs": jobs}
@@ -61,11 +64,13 @@ def test_every_good_job_finishes_and_the_bad_one_is_a_row(two_runs):
         assert not (folder / "out" / "bad.pc2").exists()
         metrics = json.loads((folder / "out" / "tracking2014-80.json").read_text())
         assert "tracking2014" in metrics["methods"]
+        for method in ("ddm", "cor"):
+            assert method in json.loads((folder / "out" / f"{method}.json").read_text())["methods"]
 
 
 def test_the_pool_and_dask_write_identical_outputs(two_runs):
     pool, dask = outputs_of(two_runs["pool"][0]), outputs_of(two_runs["dask"][0])
-    assert len(pool) == 9
+    assert len(pool) == 11
     assert pool == dask
 
 

@@ -50,7 +50,7 @@ def test_bakes_with_every_method_give_frames_and_metrics(cylinder_file):
     stages = []
     skinner = skinning.Skinner(rig, progress=lambda stage, done, total: stages.append(stage))
     assert stages
-    for method in ("lbs", "dqs", "implicit2013", "tracking2014"):
+    for method in ("lbs", "dqs", "ddm", "cor", "implicit2013", "tracking2014"):
         result = skinner.bake(method, clip="bend", self_intersections=False)
         assert result.method == method
         frames = result.frames

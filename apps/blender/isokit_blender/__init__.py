@@ -46,6 +46,8 @@ class IsokitSettings(bpy.types.PropertyGroup):
         name="Method",
         items=[("tracking2014", "Tracking (2014)", "Iso-surface tracking, Vaillant et al. 2014"),
                ("implicit2013", "Implicit (2013)", "Implicit skinning, Vaillant et al. 2013"),
+               ("ddm", "Direct Delta Mush", "Direct Delta Mush, Le & Lewis 2019"),
+               ("cor", "Centers of rotation", "Optimized centers of rotation, Le & Hodgins 2016"),
                ("dqs", "Dual quaternions", "Dual-quaternion skinning"),
                ("lbs", "Linear blend", "Linear blend skinning")],
         default="tracking2014")

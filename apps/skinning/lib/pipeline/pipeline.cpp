@@ -15,6 +15,7 @@
 #include "isokit/skinning/weights.h"
 #include "isokit/track/projector2013.h"
 #include "isokit/track/tracker.h"
+#include "pipeline/geometric_cache.h"
 
 namespace isokit::skinning {
 
@@ -28,18 +29,22 @@ const char* to_string(Method m) {
       return "implicit2013";
     case Method::kTracking2014:
       return "tracking2014";
+    case Method::kDdm:
+      return "ddm";
+    case Method::kCor:
+      return "cor";
   }
   return "?";
 }
 
 std::vector<Method> all_methods() {
-  return {Method::kLbs, Method::kDqs, Method::kImplicit2013, Method::kTracking2014};
+  return {Method::kLbs, Method::kDqs, Method::kImplicit2013, Method::kTracking2014, Method::kDdm, Method::kCor};
 }
 
 Method method_from_string(const std::string& s) {
   for (Method m : all_methods())
     if (s == to_string(m)) return m;
-  throw InputError("--method: unknown method '" + s + "'; use lbs, dqs, implicit2013 or tracking2014");
+  throw InputError("--method: unknown method '" + s + "'; use lbs, dqs, ddm, cor, implicit2013 or tracking2014");
 }
 
 namespace {
@@ -116,6 +121,22 @@ SkinField& Skinner::field(TreeKind kind) {
   return *f;
 }
 
+const DirectDeltaMush& Skinner::ddm() {
+  if (!ddm_) {
+    if (progress_) progress_("ddm precomputation", 0, 1);
+    ddm_ = cached_ddm(rig_, setup_.ddm);
+  }
+  return *ddm_;
+}
+
+const CorSkinning& Skinner::cor() {
+  if (!cor_) {
+    if (progress_) progress_("cor precomputation", 0, 1);
+    cor_ = cached_cor(rig_, setup_.cor);
+  }
+  return *cor_;
+}
+
 FrameMetrics Skinner::measure(const Pose& pose, const track::Positions& positions, bool self_intersections,
                               const std::vector<std::uint8_t>* contact) {
   // The field metrics use the 2014 tree at their own poses (the tracker's pose is left alone).
@@ -168,6 +189,8 @@ struct BakeState {
   std::unique_ptr<track::IsoSurfaceTracker> tracker;  ///< tracking2014
   std::unique_ptr<AxisGuard> guard;                   ///< tracking2014, SkinSetup::axis_guard
   std::unique_ptr<track::Projector2013> projector;    ///< implicit2013
+  const DirectDeltaMush* ddm{nullptr};                ///< ddm, or implicit2013 started from it
+  const CorSkinning* cor{nullptr};                    ///< cor, or implicit2013 started from it
   SkinField* field{nullptr};                          ///< the implicit methods' field
   track::Positions current;                           ///< tracking2014: the last result
   Pose previous;                                      ///< tracking2014: the last frame's pose
@@ -350,6 +373,25 @@ void track_frame(const Skinner& sk, BakeState& s, const Pose& pose, std::size_t 
   s.previous = pose;
 }
 
+/// The geometric skinning a method uses: ddm and cor their own, implicit2013 its
+/// `projector.initial` (SkinSetup::projector_initial), the others none (kDqs).
+InitialSkinning geometric_of(Method method, const SkinSetup& setup) {
+  if (method == Method::kDdm) return InitialSkinning::kDdm;
+  if (method == Method::kCor) return InitialSkinning::kCor;
+  return method == Method::kImplicit2013 ? setup.projector_initial : InitialSkinning::kDqs;
+}
+
+/// implicit2013's initial skinning (2013 §6): DQS (the paper), DDM or CoR.
+void initial_skin(const Skinner& sk, const BakeState& s, const std::vector<Affine>& skin, std::size_t grain,
+                  track::Positions& pos) {
+  if (s.ddm)
+    s.ddm->deform(skin, pos, grain);
+  else if (s.cor)
+    s.cor->deform(skin, pos, grain);
+  else
+    dual_quaternion_blend(sk.rig().weights, skin, sk.rig().rest, pos, nullptr, grain);
+}
+
 /// Deforms the rest mesh to `pose` by the bake's method into `pos`; returns the method's contact
 /// flags (the implicit methods), else null.
 const std::vector<std::uint8_t>* deform(const Skinner& sk, Method method, BakeState& s, const Pose& pose,
@@ -363,8 +405,14 @@ const std::vector<std::uint8_t>* deform(const Skinner& sk, Method method, BakeSt
     case Method::kDqs:
       dual_quaternion_blend(rig.weights, skin, rig.rest, pos, nullptr, grain);
       return nullptr;
+    case Method::kDdm:
+      s.ddm->deform(skin, pos, grain);
+      return nullptr;
+    case Method::kCor:
+      s.cor->deform(skin, pos, grain);
+      return nullptr;
     case Method::kImplicit2013: {
-      dual_quaternion_blend(rig.weights, skin, rig.rest, pos, nullptr, grain);
+      initial_skin(sk, s, skin, grain, pos);
       const track::Positions skinned = s.masked.empty() ? track::Positions{} : pos;
       s.field->set_pose(skin);
       const track::TrackStats ts = s.projector->project(s.field->function(), pos);
@@ -408,6 +456,9 @@ void start_bake(Skinner& sk, Method method, const BakeOptions& options, BakeStat
     po.count_inverted = false;  // the metrics count inverted triangles
     s.projector = std::make_unique<track::Projector2013>(rig.rest, rig.triangles, s.field->function(), po);
   }
+  const InitialSkinning geometric = geometric_of(method, setup);
+  if (geometric == InitialSkinning::kDdm) s.ddm = &sk.ddm();
+  if (geometric == InitialSkinning::kCor) s.cor = &sk.cor();
   s.current = rig.rest;
   s.previous = rest;
   s.prev_skin = skinning_matrices(rig, rest);
@@ -514,6 +565,9 @@ BakeResult Skinner::bake(Method method, const std::vector<Pose>& poses, const Ba
   BakeResult out;
   out.method = method;
   FrameBaker baker(*this, method, options);
+  const InitialSkinning geometric = geometric_of(method, setup_);
+  if (geometric == InitialSkinning::kDdm) out.setup_seconds = ddm().precompute_seconds();
+  if (geometric == InitialSkinning::kCor) out.setup_seconds = cor().precompute_seconds();
   double total_ms = 0, vertex_iterations = 0;
   for (std::size_t f = 0; f < poses.size(); ++f) {
     FrameStats st;

@@ -142,6 +142,7 @@ std::string metrics_json(const Rig& rig, const std::vector<BakeResult>& results,
     m["mean_ms"] = r.mean_ms;
     m["ratio_to_dqs"] = num(r.mean_ms / dqs);
     m["vertex_iterations_per_second"] = r.vertex_iterations_per_second;
+    m["setup_seconds"] = r.setup_seconds;
     m["rest_recovery"] = r.rest_recovery >= 0 ? json(r.rest_recovery) : json(nullptr);
     json worst = metrics_to_json(r.worst);
     add_call_counts(r, m, worst);

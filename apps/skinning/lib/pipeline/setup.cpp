@@ -32,6 +32,24 @@ const char* to_string(JointOperator op) {
   return "auto";
 }
 
+const char* to_string(InitialSkinning s) {
+  switch (s) {
+    case InitialSkinning::kDdm:
+      return "ddm";
+    case InitialSkinning::kCor:
+      return "cor";
+    case InitialSkinning::kDqs:
+      break;
+  }
+  return "dqs";
+}
+
+InitialSkinning initial_skinning_from_string(const std::string& s, const std::string& where) {
+  for (InitialSkinning i : {InitialSkinning::kDqs, InitialSkinning::kDdm, InitialSkinning::kCor})
+    if (s == to_string(i)) return i;
+  throw InputError(where + ": unknown initial skinning '" + s + "'; use dqs, ddm or cor");
+}
+
 JointOperator joint_operator_from_string(const std::string& s, const std::string& where) {
   for (JointOperator op : {JointOperator::kAuto, JointOperator::kUnion, JointOperator::kBlend,
                            JointOperator::kBulge, JointOperator::kContact})
@@ -447,12 +465,40 @@ void read_tracker(const json& t, const std::string& w, SkinSetup& s) {
   read_tracker_repairs(t, w, s);
 }
 
-/// Section `projector`: the 2013 projection (track::ProjectorOptions).
-void read_projector(const json& p, const std::string& w, track::ProjectorOptions& projector) {
+/// Section `ddm`: Direct Delta Mush (DdmOptions).
+void read_ddm(const json& p, const std::string& w, DdmOptions& o) {
+  check_keys(p, {"smoothing_steps", "lambda", "kappa", "alpha", "variant", "prune"}, w);
+  read(p, "smoothing_steps", o.smoothing_steps, w);
+  read(p, "lambda", o.lambda, w);
+  read(p, "kappa", o.kappa, w);
+  read(p, "alpha", o.alpha, w);
+  read(p, "prune", o.prune, w);
+  std::string variant = to_string(o.variant);
+  read(p, "variant", variant, w);
+  o.variant = ddm_variant_from_string(variant, w + ".variant");
+  check_ddm_options(o, w);
+}
+
+/// Section `cor`: optimized centers of rotation (CorOptions).
+void read_cor(const json& p, const std::string& w, CorOptions& o) {
+  check_keys(p, {"sigma", "fallback"}, w);
+  read(p, "sigma", o.sigma, w);
+  std::string fallback = to_string(o.fallback);
+  read(p, "fallback", fallback, w);
+  o.fallback = cor_fallback_from_string(fallback, w + ".fallback");
+  check_cor_options(o, w);
+}
+
+/// Section `projector`: the 2013 projection (track::ProjectorOptions) and its initial skinning.
+void read_projector(const json& p, const std::string& w, track::ProjectorOptions& projector,
+                    InitialSkinning& initial) {
   check_keys(p,
              {"sigma", "max_iterations", "contact_angle_deg", "tolerance", "smoothing_steps",
-              "beta_diffusion_steps", "stall_steps", "progress", "secant", "secant_max_factor"},
+              "beta_diffusion_steps", "stall_steps", "progress", "secant", "secant_max_factor", "initial"},
              w);
+  std::string init = to_string(initial);
+  read(p, "initial", init, w);
+  initial = initial_skinning_from_string(init, w + ".initial");
   read(p, "sigma", projector.sigma, w);
   read(p, "max_iterations", projector.max_iterations, w);
   read(p, "contact_angle_deg", projector.contact_angle_deg, w);
@@ -607,7 +653,7 @@ SkinSetup setup_from_json(const std::string& text, const std::string& source, co
   s.source = source;
   check_keys(j,
              {"version", "preset", "tree", "default_operator", "joints", "fit", "operators", "tracker",
-              "projector", "substeps", "mask", "muscles"},
+              "projector", "substeps", "mask", "muscles", "ddm", "cor"},
              source);
   if (j.contains("preset")) {
     const json& p = j.at("preset");
@@ -628,7 +674,10 @@ SkinSetup setup_from_json(const std::string& text, const std::string& source, co
   if (j.contains("fit")) read_fit(j.at("fit"), source + ".fit", s.fit, s.capsule_match, s.max_fit_error);
   if (j.contains("operators")) read_operators(j.at("operators"), source + ".operators", base_dir, s);
   if (j.contains("tracker")) read_tracker(j.at("tracker"), source + ".tracker", s);
-  if (j.contains("projector")) read_projector(j.at("projector"), source + ".projector", s.projector);
+  if (j.contains("projector"))
+    read_projector(j.at("projector"), source + ".projector", s.projector, s.projector_initial);
+  if (j.contains("ddm")) read_ddm(j.at("ddm"), source + ".ddm", s.ddm);
+  if (j.contains("cor")) read_cor(j.at("cor"), source + ".cor", s.cor);
   if (j.contains("substeps")) read_substeps(j.at("substeps"), source + ".substeps", s.substeps);
   if (j.contains("mask")) read_mask(j.at("mask"), source + ".mask", s.mask);
   if (j.contains("muscles")) read_muscles(j.at("muscles"), source + ".muscles", s.muscles);

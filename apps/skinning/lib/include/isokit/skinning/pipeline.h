@@ -7,7 +7,10 @@
 /// - `implicit2013`: DQS, then the 2013 projector on the 2013 tree (Implicit Skinning §5);
 /// - `tracking2014`: incremental tracking on the 2014 tree (2014 §5): each vertex moved by its
 ///   partition joint's rigid delta, Newton projection, tangential ARAP relaxation with
-///   DQS-blended target rotations, contact smoothing; animation steps split by sub-stepping.
+///   DQS-blended target rotations, contact smoothing; animation steps split by sub-stepping;
+/// - `ddm`: Direct Delta Mush (Le & Lewis 2019; ddm.h), after a per-rig precomputation;
+/// - `cor`: skinning with optimized centers of rotation (Le & Hodgins 2016; cor.h), after a
+///   per-rig precomputation.
 /// Every method's frames are measured with the same field (the 2014 tree) and the same
 /// geometric metrics (metrics.h, docs/QUALITY.md).
 #pragma once
@@ -18,6 +21,8 @@
 #include <vector>
 
 #include "isokit/skinning/animation.h"
+#include "isokit/skinning/cor.h"
+#include "isokit/skinning/ddm.h"
 #include "isokit/skinning/metrics.h"
 #include "isokit/skinning/rig.h"
 #include "isokit/skinning/setup.h"
@@ -32,7 +37,8 @@ namespace isokit::skinning {
 Rig open_rig(const std::string& spec, double fps = 30, const Progress& progress = {},
              std::vector<std::string>* warnings = nullptr, const MaskSource& mask = {});
 
-enum class Method { kLbs, kDqs, kImplicit2013, kTracking2014 };
+/// Fixed order (benchmarks index it): the four original methods, then the geometric ones added.
+enum class Method { kLbs, kDqs, kImplicit2013, kTracking2014, kDdm, kCor };
 
 const char* to_string(Method m);
 /// \throw InputError listing the methods for an unknown name.
@@ -77,6 +83,10 @@ struct BakeResult {
   double rest_recovery{-1};  ///< last frame vs rest / bbox diagonal, when the last pose is the rest pose
   double mean_ms{0};
   double vertex_iterations_per_second{0};  ///< vertex updates per second of deformation time
+  /// Seconds of the method's own precomputation on this rig (ddm, cor, and implicit2013 started
+  /// from them; `Skinner::ddm` / `cor`), as measured when it was made, even when this bake took
+  /// it from the process cache; 0 for the other methods. The fit is `FittedRig::fit_seconds`.
+  double setup_seconds{0};
 };
 
 struct BakeOptions {
@@ -139,6 +149,11 @@ class Skinner {
   const FittedRig& fitted() const { return *fitted_; }
   /// The composed field of a tree kind (built on first use).
   SkinField& field(TreeKind kind);
+  /// The Direct Delta Mush / center-of-rotation precomputation of this rig with the setup's
+  /// `ddm` / `cor` options, made on first use and kept in a process cache under a content key
+  /// (rest mesh, triangles, weights, joint count, options), so skinners of the same rig share it.
+  const DirectDeltaMush& ddm();
+  const CorSkinning& cor();
 
   /// Runs `method` over `poses` (local joint transforms per frame). The tracking starts from the
   /// rest mesh at the rest pose and sub-steps into the first frame.
@@ -156,6 +171,8 @@ class Skinner {
   Progress progress_;
   std::unique_ptr<FittedRig> fitted_;
   std::unique_ptr<SkinField> field2013_, field2014_;
+  std::shared_ptr<const DirectDeltaMush> ddm_;
+  std::shared_ptr<const CorSkinning> cor_;
   std::unique_ptr<FrameMetricsEvaluator> evaluator_;
   std::vector<float> iso2014_;  ///< the metrics' iso-values (2014 tree at rest), sampled on first use
   std::vector<std::uint8_t> rest_inverted_;  ///< triangles already inverted w.r.t. the field at rest

@@ -17,7 +17,9 @@
 ///   "tracker": { "max_iterations": 100, "tolerance": 1e-5, "sigma": 1.0, "contact_angle_deg": 55,
 ///                "initial_newton_steps": 10, "smoothing_steps": 5, "beta_diffusion_steps": 3,
 ///                "relaxation": "jacobi" },
-///   "projector": { "sigma": 0.35, "max_iterations": 50, "contact_angle_deg": 55 },
+///   "projector": { "sigma": 0.35, "max_iterations": 50, "contact_angle_deg": 55, "initial": "dqs" },
+///   "ddm": { "smoothing_steps": 3, "lambda": 3, "kappa": 1, "alpha": 0, "variant": "v0", "prune": 1e-3 },
+///   "cor": { "sigma": 0.1, "fallback": "lbs" },
 ///   "substeps": { "paper_rule": true, "fold_rule": true, "min_step_rad": 0.05, "max_step_rad": 0 } }
 /// ```
 /// `fit.field`: "hrbf" (2013 §4.1, the default) or "distance" (each part's field built from its
@@ -49,6 +51,8 @@
 
 #include "isokit/implicit/fit.h"
 #include "isokit/operators/spec.h"
+#include "isokit/skinning/cor.h"
+#include "isokit/skinning/ddm.h"
 #include "isokit/skinning/rig_io.h"
 #include "isokit/track/projector2013.h"
 #include "isokit/track/tracker.h"
@@ -62,6 +66,9 @@ namespace isokit::skinning {
 enum class JointOperator { kAuto, kUnion, kBlend, kBulge, kContact };
 
 enum class TreeKind { kAuto, k2013, k2014 };
+
+/// The geometric skinning a method starts from (setup key `projector.initial`).
+enum class InitialSkinning { kDqs, kDdm, kCor };
 
 /// An operator spec file named by the setup, loaded and validated when the setup is read.
 struct SpecFile {
@@ -175,6 +182,14 @@ struct SkinSetup {
   std::optional<SpecFile> contact_spec, bulge_spec;
   track::TrackerOptions tracker{};      ///< the 2014 tracker. Setup key `tracker`
   track::ProjectorOptions projector{};  ///< the 2013 projection. Setup key `projector`
+  /// implicit2013: the initial geometric skinning the 2013 projector corrects (2013 §6,
+  /// "Influence of the initial geometric skinning solution": a smoother start without deep
+  /// self-intersections corrects better). "dqs" (the paper's, default), "ddm" or "cor" (with the
+  /// setup's `ddm` / `cor` options). Setup key `projector.initial`
+  /// (docs/decisions/projector-initial-skinning.md).
+  InitialSkinning projector_initial{InitialSkinning::kDqs};
+  DdmOptions ddm{};  ///< method `ddm` (Le & Lewis 2019). Setup key `ddm`
+  CorOptions cor{};  ///< method `cor` (Le & Hodgins 2016). Setup key `cor`
   SubstepOptions substeps{};            ///< setup key `substeps`
   /// Where a rig file keeps its painted relaxation mask (setup key `mask`: `attribute`,
   /// `color_set`, `channel` "r" | "g" | "b" | "a"); read by open_rig. Default: the glTF attribute
@@ -223,6 +238,9 @@ struct SkinSetup {
 };
 
 const char* to_string(JointOperator op);
+const char* to_string(InitialSkinning s);
+/// \throw InputError naming `where` for a name other than dqs, ddm, cor.
+InitialSkinning initial_skinning_from_string(const std::string& s, const std::string& where);
 JointOperator joint_operator_from_string(const std::string& s, const std::string& where);
 
 /// The `paper` preset (setup key `"preset": "paper"`, applied before the other keys, which may
