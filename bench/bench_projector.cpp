@@ -3,11 +3,12 @@
 // .gltf / .fbx of ISOKIT_RIGS (default ../shared/data/rigs) and ../shared/data/Fox.glb when they
 // exist, the first ISOKIT_BENCH_FRAMES (default 30) frames of each rig's first clip.
 //  - BM_Implicit2013/<rig>/<rules>: the bake per frame (metrics off), with isokit's stopping rules
-//    and secant steps (`isokit`) and with the paper's (`paper`: σ steps, only the cap stops a
-//    vertex that makes no progress). Manual time = mean ms per frame; counters per frame: Newton
+//    and secant steps (`isokit`) and with the paper preset's (`paper`: σ steps, tolerance 1e-4,
+//    only the cap stops a vertex that makes no progress). Manual time = mean ms per frame; counters per frame: Newton
 //    steps, field evaluations, and the share of calls at the cap.
-//  - BM_FieldEval/<rig>: one evaluation of the composed field (the projector's batch path) at
-//    every DQS vertex position of the clip's frames; manual time = ns per point. Run it under
+//  - BM_FieldEval/<rig>/<path>: one evaluation of the composed field at every DQS vertex position
+//    of the clip's frames, by the projector's path (`batch`: the sparse evaluator, up to 127
+//    leaves) and by the instruction loop (`loop`); manual time = ns per point. Run it under
 //    `perf record` for the evaluation's profile.
 #include <benchmark/benchmark.h>
 
@@ -19,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "isokit/implicit/evaluators.h"
 #include "isokit/skinning/animation.h"
 #include "isokit/skinning/deform.h"
 #include "isokit/skinning/pipeline.h"
@@ -64,8 +66,9 @@ Case& load_case(const std::string& file) {
   if (c->poses.size() > frames) c->poses.resize(frames);
   c->isokit = std::make_unique<Skinner>(c->rig);
   SkinSetup paper;
-  paper.projector.stall_steps = 0;
+  paper.projector.stall_steps = 0;  // the paper preset's projector (apply_paper_preset)
   paper.projector.secant = false;
+  paper.projector.tolerance = 1e-4f;
   c->paper = std::make_unique<Skinner>(c->rig, paper);
   cache.emplace_back(file, std::move(c));
   return *cache.back().second;
@@ -102,7 +105,9 @@ void BM_Implicit2013(benchmark::State& state, const std::string& file, bool pape
   state.counters["capped_share"] = calls > 0 ? capped / calls : 0.0;
 }
 
-void BM_FieldEval(benchmark::State& state, const std::string& file) {
+/// `loop`: the instruction loop (ScalarEvaluator, what programs of more than 63 leaves ran before
+/// the two-word leaf mask), else the projector's path (the batch evaluator: sparse up to 127).
+void BM_FieldEval(benchmark::State& state, const std::string& file, bool loop) {
   Case* c = nullptr;
   try {
     c = &load_case(file);
@@ -130,7 +135,12 @@ void BM_FieldEval(benchmark::State& state, const std::string& file) {
     for (std::size_t f = 0; f < points.size(); ++f) {
       const std::size_t n = points[f].size();
       values.resize(n), grads.resize(n), contact.assign(n, 0);
-      field.function(poses[f])(points[f].data(), n, values.data(), grads.data(), contact.data());
+      if (loop) {
+        implicit::ScalarEvaluator eval(field.program(), *poses[f]);
+        for (std::size_t k = 0; k < n; ++k) values[k] = eval.eval(points[f][k], nullptr, true).value;
+      } else {
+        field.function(poses[f])(points[f].data(), n, values.data(), grads.data(), contact.data());
+      }
       benchmark::DoNotOptimize(values.data());
       count += double(n);
     }
@@ -155,10 +165,11 @@ int main(int argc, char** argv) {
           ->Iterations(1)
           ->Repetitions(5)
           ->ReportAggregatesOnly(true);
-    benchmark::RegisterBenchmark(("BM_FieldEval/" + name).c_str(),
-                                 [file](benchmark::State& s) { BM_FieldEval(s, file); })
-        ->UseManualTime()
-        ->Unit(benchmark::kMillisecond);
+    for (const bool loop : {false, true})
+      benchmark::RegisterBenchmark(("BM_FieldEval/" + name + (loop ? "/loop" : "/batch")).c_str(),
+                                   [file, loop](benchmark::State& s) { BM_FieldEval(s, file, loop); })
+          ->UseManualTime()
+          ->Unit(benchmark::kMillisecond);
   }
   benchmark::Initialize(&argc, argv);
   benchmark::RunSpecifiedBenchmarks();
