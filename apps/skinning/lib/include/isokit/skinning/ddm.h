@@ -23,9 +23,9 @@
 ///
 /// Storage is sparse: per vertex, the bones whose smoothed weight Σ_k B_ik w_kj is at least
 /// `prune` times the vertex's largest; no #V × #B matrix is kept (the solve runs over blocks of
-/// bones). Rotations are extracted with the iteration of Müller et al. 2016 (rotation that
-/// maximises tr(Rᵀ A)), started from the vertex's dominant bone; it reaches the exact rotation in
-/// zero steps at rest and under a rigid motion of the whole skeleton.
+/// bones). Rotations (max tr(Rᵀ A)) are extracted with the iteration of Müller et al. 2016,
+/// started from the vertex's dominant bone (exact in zero steps at rest and under a rigid motion
+/// of the whole skeleton), and with the SVD where it has not converged in 8 steps.
 #pragma once
 
 #include <cstddef>
