@@ -4,8 +4,8 @@
 // exist, the first ISOKIT_BENCH_FRAMES (default 30) frames of each rig's first clip.
 //  - BM_Implicit2013/<rig>/<rules>: the bake per frame (metrics off), with isokit's stopping rules
 //    and secant steps (`isokit`) and with the paper preset's (`paper`: σ steps, tolerance 1e-4,
-//    only the cap stops a vertex that makes no progress). Manual time = mean ms per frame; counters per frame: Newton
-//    steps, field evaluations, and the share of calls at the cap.
+//    only the cap stops a vertex that makes no progress). Manual time = mean ms per frame; counters per
+//    frame: Newton steps, field evaluations, and the share of calls at the cap.
 //  - BM_FieldEval/<rig>/<path>: one evaluation of the composed field at every DQS vertex position
 //    of the clip's frames, by the projector's path (`batch`: the sparse evaluator, up to 127
 //    leaves) and by the instruction loop (`loop`); manual time = ns per point. Run it under

@@ -88,8 +88,8 @@ Projector2013::Projector2013(const Positions& rest, const Triangles& triangles,
           "ProjectorOptions::contact_angle_deg", "must be in (0, 180]", "use 55 (2013)");
   require(options_.stall_steps >= 0 && options_.stall_steps <= 255, "ProjectorOptions::stall_steps",
           "must be in [0, 255]", "use 3, or 0 for none (2013)");
-  require(options_.progress > 0.f && options_.progress <= 1.f, "ProjectorOptions::progress", "must be in (0, 1]",
-          "use 0.9");
+  require(options_.progress > 0.f && options_.progress <= 1.f, "ProjectorOptions::progress",
+          "must be in (0, 1]", "use 0.9");
   require(options_.secant_max_factor > 0.f && options_.secant_max_factor <= 1.f,
           "ProjectorOptions::secant_max_factor", "must be in (0, 1]", "use 0.7");
   require(std::isfinite(options_.tolerance) && options_.tolerance >= 0.f, "ProjectorOptions::tolerance",
@@ -160,16 +160,16 @@ struct ProjectionBuffers {
     for (std::size_t i = 0; i < live.size(); ++i) live[i] = static_cast<int>(i);
   }
   std::vector<Vec3f> cur;
-  std::vector<Vec3f> prev;    ///< where each vertex was at its last evaluation
-  std::vector<Vec3f> normal;  ///< unit gradient of the last evaluation (contact rule)
-  std::vector<Vec3f> batch, grads, moved;  ///< per live slot
-  std::vector<float> slot_values;          ///< per live slot
-  std::vector<std::uint8_t> slot_contact;  ///< per live slot: the field's contact flag
+  std::vector<Vec3f> prev;                  ///< where each vertex was at its last evaluation
+  std::vector<Vec3f> normal;                ///< unit gradient of the last evaluation (contact rule)
+  std::vector<Vec3f> batch, grads, moved;   ///< per live slot
+  std::vector<float> slot_values;           ///< per live slot
+  std::vector<std::uint8_t> slot_contact;   ///< per live slot: the field's contact flag
   std::vector<std::uint8_t> field_contact;  ///< the field's contact flag at the last evaluation
-  std::vector<float> values;        ///< f at the last evaluation
-  std::vector<float> signed_resid;  ///< iso - f at the last evaluation
-  std::vector<float> best;          ///< smallest |iso - f| of the call (progress rule)
-  std::vector<float> sigma;         ///< the factor of the last Newton step (0: none yet, or a secant step)
+  std::vector<float> values;                ///< f at the last evaluation
+  std::vector<float> signed_resid;          ///< iso - f at the last evaluation
+  std::vector<float> best;                  ///< smallest |iso - f| of the call (progress rule)
+  std::vector<float> sigma;  ///< the factor of the last Newton step (0: none yet, or a secant step)
   std::vector<Stop> stop;
   std::vector<std::uint8_t> strikes;  ///< consecutive Newton steps without progress
   std::vector<std::uint8_t> stale;    ///< moved since its last evaluation
@@ -196,8 +196,8 @@ float step_factor(const ProjectorOptions& o, bool paired, float d, float last, f
 /// The move of a live vertex after its evaluation (f, g): none when a rule stops it (its reason
 /// in `s.stop`), else the Newton step of eq. 4 — or the secant point when the residual changed
 /// sign since the last step (ProjectorOptions::secant).
-Vec3f newton_move(const ProjectorOptions& o, float iso, float max_step, std::size_t i, float value, const Vec3f& g,
-                  ProjectionBuffers& s) {
+Vec3f newton_move(const ProjectorOptions& o, float iso, float max_step, std::size_t i, float value,
+                  const Vec3f& g, ProjectionBuffers& s) {
   const float g2 = squared_norm(g);
   if (!std::isfinite(value) || !detail::finite(g) || !(g2 > o.min_gradient * o.min_gradient)) {
     s.stop[i] = Stop::kLost;

@@ -171,13 +171,15 @@ TEST_CASE("ddm: one bone per vertex and no smoothing is LBS", "[skinning][geomet
   }
 }
 
-TEST_CASE("cor: a twisted cylinder keeps its cross-section, where LBS collapses", "[skinning][geometric][unit]") {
+TEST_CASE("cor: a twisted cylinder keeps its cross-section, where LBS collapses",
+          "[skinning][geometric][unit]") {
   const Rig& rig = cylinder();
   const std::vector<Affine> skin = skinning_matrices(rig, peak(rig, "Bone1:y:150"));
   // The ring of vertices at the joint (y = 1, the 50/50 blend), away from the caps.
   std::vector<int> ring;
   double best = 1e9;
-  for (Eigen::Index v = 0; v < rig.rest.rows(); ++v) best = std::min(best, std::abs(double(rig.rest(v, 1)) - 1.0));
+  for (Eigen::Index v = 0; v < rig.rest.rows(); ++v)
+    best = std::min(best, std::abs(double(rig.rest(v, 1)) - 1.0));
   for (Eigen::Index v = 0; v < rig.rest.rows(); ++v)
     if (std::abs(double(rig.rest(v, 1)) - 1.0) <= best + 1e-6) ring.push_back(static_cast<int>(v));
   REQUIRE(ring.size() >= 12);
@@ -203,7 +205,8 @@ TEST_CASE("ddm: the precomputed Ω match a dense reference solve", "[skinning][g
   Eigen::MatrixXd wd = Eigen::MatrixXd::Zero(n, 3);
   for (Eigen::Index v = 0; v < n; ++v) {
     const double y = m.v(v, 1);
-    Eigen::Vector3d raw(std::exp(-4 * (y + 1) * (y + 1)), std::exp(-4 * y * y), std::exp(-4 * (y - 1) * (y - 1)));
+    Eigen::Vector3d raw(std::exp(-4 * (y + 1) * (y + 1)), std::exp(-4 * y * y),
+                        std::exp(-4 * (y - 1) * (y - 1)));
     raw /= raw.sum();
     for (int j = 0; j < 3; ++j) {
       w.joints.push_back(j);
@@ -251,7 +254,8 @@ TEST_CASE("ddm: pruning keeps the storage sparse", "[skinning][geometric][unit]"
   CHECK(ddm.precompute_seconds() > 0);
 }
 
-TEST_CASE("geometric methods: bad parameters are one-line errors naming the key", "[skinning][geometric][unit]") {
+TEST_CASE("geometric methods: bad parameters are one-line errors naming the key",
+          "[skinning][geometric][unit]") {
   const auto [text, key] = GENERATE(table<std::string, std::string>({
       {R"({"ddm": {"lambda": -1}})", "s.json.ddm.lambda"},
       {R"({"ddm": {"smoothing_steps": 1000}})", "s.json.ddm.smoothing_steps"},
@@ -263,6 +267,7 @@ TEST_CASE("geometric methods: bad parameters are one-line errors naming the key"
       {R"({"cor": {"sigma": 0}})", "s.json.cor.sigma"},
       {R"({"cor": {"fallback": "none"}})", "s.json.cor.fallback"},
       {R"({"projector": {"initial": "lbs"}})", "s.json.projector.initial"},
+      {R"({"tracker": {"anchor": "rigid"}})", "s.json.tracker.anchor"},
   }));
   INFO(text);
   try {
@@ -276,15 +281,17 @@ TEST_CASE("geometric methods: bad parameters are one-line errors naming the key"
   }
   const SkinSetup ok = setup_from_json(
       R"({"ddm": {"smoothing_steps": 2, "lambda": 1.5, "variant": "v1"}, "cor": {"sigma": 0.2, "fallback": "dqs"},
-          "projector": {"initial": "ddm"}})",
+          "projector": {"initial": "ddm"}, "tracker": {"anchor": "cor"}})",
       "s.json");
   CHECK(ok.ddm.smoothing_steps == 2);
   CHECK(ok.ddm.variant == DdmVariant::kV1);
   CHECK(ok.cor.fallback == CorFallback::kDqs);
   CHECK(ok.projector_initial == InitialSkinning::kDdm);
+  CHECK(ok.tracker_anchor == InitialSkinning::kCor);
 }
 
-TEST_CASE("pipeline: ddm and cor are methods, and implicit2013 starts from them", "[skinning][geometric][unit]") {
+TEST_CASE("pipeline: ddm and cor are methods, and implicit2013 starts from them",
+          "[skinning][geometric][unit]") {
   CHECK(method_from_string("ddm") == Method::kDdm);
   CHECK(method_from_string("cor") == Method::kCor);
   const Rig& rig = cylinder();
@@ -292,7 +299,8 @@ TEST_CASE("pipeline: ddm and cor are methods, and implicit2013 starts from them"
   BakeOptions quick;
   quick.self_intersections = false;
   for (const char* initial : {"ddm", "cor"}) {
-    Skinner sk(rig, setup_from_json(std::string(R"({"projector": {"initial": ")") + initial + "\"}}", "s.json"));
+    Skinner sk(rig,
+               setup_from_json(std::string(R"({"projector": {"initial": ")") + initial + "\"}}", "s.json"));
     for (Method m : {Method::kDdm, Method::kCor, Method::kImplicit2013}) {
       INFO(initial << " " << to_string(m));
       const BakeResult r = sk.bake(m, poses, quick);
@@ -301,4 +309,35 @@ TEST_CASE("pipeline: ddm and cor are methods, and implicit2013 starts from them"
       CHECK(r.setup_seconds > 0);
     }
   }
+}
+
+TEST_CASE("pipeline: tracking2014 pins masked vertices at their ddm / cor position with tracker.anchor",
+          "[skinning][geometric][unit]") {
+  // Vertices painted 0 are pinned at their anchor: the partition joint's rigid transform by
+  // default, the geometric method's position with tracker.anchor (bit for bit: it is the anchor).
+  Rig rig = cylinder();
+  rig.relax_mask.assign(std::size_t(rig.rest.rows()), 1.0f);
+  std::vector<int> painted;
+  for (Eigen::Index v = 0; v < rig.rest.rows(); v += 7) {
+    rig.relax_mask[std::size_t(v)] = 0.0f;
+    painted.push_back(int(v));
+  }
+  const std::vector<Pose> poses = bend_animation(rig, {parse_bend("Bone1:x:90", rig)}, 5);
+  BakeOptions quick;
+  quick.self_intersections = false;
+  double moved = 0;
+  for (const char* anchor : {"ddm", "cor"}) {
+    INFO(anchor);
+    const Method geometric = method_from_string(anchor);
+    Skinner sk(rig, setup_from_json(std::string(R"({"tracker": {"anchor": ")") + anchor + "\"}}", "s.json"));
+    const BakeResult tracked = sk.bake(Method::kTracking2014, poses, quick);
+    const BakeResult reference = sk.bake(geometric, poses, quick);
+    for (std::size_t f = 0; f < poses.size(); ++f)
+      for (int v : painted) CHECK(tracked.frames[f].row(v) == reference.frames[f].row(v));
+    Skinner plain(rig);
+    const BakeResult rigid = plain.bake(Method::kTracking2014, poses, quick);
+    for (int v : painted)
+      moved = std::max(moved, double((rigid.frames[2].row(v) - tracked.frames[2].row(v)).norm()));
+  }
+  CHECK(moved > 1e-3);  // the default anchors (rigid) are elsewhere
 }

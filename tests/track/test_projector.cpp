@@ -169,7 +169,8 @@ TEST_CASE("projector 2013: vertices at their iso-value take one evaluation each"
   }
 }
 
-TEST_CASE("projector 2013: every vertex ends within the tolerance, reported as measured", "[track][projector]") {
+TEST_CASE("projector 2013: every vertex ends within the tolerance, reported as measured",
+          "[track][projector]") {
   // Random radial offsets of a capsule's vertices (± 40 % of the radius) projected back with
   // isokit's rules and with the paper's σ steps: every call ends before the cap with every
   // vertex at its iso-value, the residual statistics equal the field at the returned positions,

@@ -38,13 +38,15 @@ const char* to_string(Method m) {
 }
 
 std::vector<Method> all_methods() {
-  return {Method::kLbs, Method::kDqs, Method::kImplicit2013, Method::kTracking2014, Method::kDdm, Method::kCor};
+  return {Method::kLbs,          Method::kDqs, Method::kImplicit2013,
+          Method::kTracking2014, Method::kDdm, Method::kCor};
 }
 
 Method method_from_string(const std::string& s) {
   for (Method m : all_methods())
     if (s == to_string(m)) return m;
-  throw InputError("--method: unknown method '" + s + "'; use lbs, dqs, ddm, cor, implicit2013 or tracking2014");
+  throw InputError("--method: unknown method '" + s +
+                   "'; use lbs, dqs, ddm, cor, implicit2013 or tracking2014");
 }
 
 namespace {
@@ -189,12 +191,12 @@ struct BakeState {
   std::unique_ptr<track::IsoSurfaceTracker> tracker;  ///< tracking2014
   std::unique_ptr<AxisGuard> guard;                   ///< tracking2014, SkinSetup::axis_guard
   std::unique_ptr<track::Projector2013> projector;    ///< implicit2013
-  const DirectDeltaMush* ddm{nullptr};                ///< ddm, or implicit2013 started from it
-  const CorSkinning* cor{nullptr};                    ///< cor, or implicit2013 started from it
-  SkinField* field{nullptr};                          ///< the implicit methods' field
-  track::Positions current;                           ///< tracking2014: the last result
-  Pose previous;                                      ///< tracking2014: the last frame's pose
-  std::vector<Affine> prev_skin;                      ///< tracking2014: the last sub-step's matrices
+  const DirectDeltaMush* ddm{nullptr};  ///< ddm, implicit2013 started from it, tracking2014 anchored to it
+  const CorSkinning* cor{nullptr};      ///< cor, or implicit2013 started from it
+  SkinField* field{nullptr};            ///< the implicit methods' field
+  track::Positions current;             ///< tracking2014: the last result
+  Pose previous;                        ///< tracking2014: the last frame's pose
+  std::vector<Affine> prev_skin;        ///< tracking2014: the last sub-step's matrices
   /// The relaxation mask per vertex (`vertex_mask`; empty: all 1) and its vertices below 1.
   std::vector<float> mask;
   std::vector<int> masked;
@@ -250,14 +252,20 @@ std::vector<float> vertex_mask(const Skinner& sk, const std::vector<char>& piece
 /// The masked vertices' rigid positions (2014 Fig. 11: "rigidly transformed according to their
 /// nearest bone"): each moved by its partition joint's skinning matrix `skin`, a rigid piece's
 /// vertex by its piece's one transform and a small part's vertex as DQS moves it (its position in
-/// `skinned`); other rows untouched.
+/// `skinned`); other rows untouched. With `anchor` (SkinSetup::tracker_anchor ddm / cor: that
+/// method's positions), every masked vertex but a rigid piece's takes its row there instead.
 void rigid_positions(const Skinner& sk, const BakeState& s, const std::vector<Affine>& skin,
-                     const track::Positions& skinned, track::Positions& out) {
+                     const track::Positions& skinned, track::Positions& out, const track::Positions* anchor) {
   const std::vector<int>& partition = sk.fitted().partition();
   const track::Positions& rest = sk.rig().rest;
   if (out.rows() != rest.rows()) out = rest;
   for (int v : s.masked) {
-    if (!s.piece.empty() && s.piece[static_cast<std::size_t>(v)]) {
+    const char piece = s.piece.empty() ? 0 : s.piece[static_cast<std::size_t>(v)];
+    if (anchor && piece != 1) {  // SkinSetup::tracker_anchor: ddm / cor
+      out.row(v) = anchor->row(v);
+      continue;
+    }
+    if (piece) {
       out.row(v) = skinned.row(v);
       continue;
     }
@@ -340,7 +348,7 @@ void track_frame(const Skinner& sk, BakeState& s, const Pose& pose, std::size_t 
   const int n = substeps(rig, s.previous, pose, sk.setup().substeps);
   st.substeps = n;
   std::vector<Mat3f> rotations;
-  track::Positions scratch;
+  track::Positions scratch, anchor_skin;
   for (int k = 1; k <= n; ++k) {
     const Pose ps = k == n ? pose : interpolate(s.previous, pose, double(k) / n);
     const std::vector<Affine> skin = skinning_matrices(rig, ps);
@@ -352,7 +360,10 @@ void track_frame(const Skinner& sk, BakeState& s, const Pose& pose, std::size_t 
     if (s.masked.empty()) {
       ts = s.tracker->track(s.field->function(), rotations, s.current);
     } else {
-      rigid_positions(sk, s, skin, scratch, s.anchors);
+      const bool geometric = s.ddm || s.cor;  // SkinSetup::tracker_anchor
+      if (s.ddm) s.ddm->deform(skin, anchor_skin, grain);
+      if (s.cor) s.cor->deform(skin, anchor_skin, grain);
+      rigid_positions(sk, s, skin, scratch, s.anchors, geometric ? &anchor_skin : nullptr);
       ts = s.tracker->track(s.field->function(), rotations, s.current, s.anchors);
     }
     ++st.tracker_calls;
@@ -374,10 +385,12 @@ void track_frame(const Skinner& sk, BakeState& s, const Pose& pose, std::size_t 
 }
 
 /// The geometric skinning a method uses: ddm and cor their own, implicit2013 its
-/// `projector.initial` (SkinSetup::projector_initial), the others none (kDqs).
+/// `projector.initial` (SkinSetup::projector_initial), tracking2014 its anchors'
+/// (SkinSetup::tracker_anchor), the others none (kDqs).
 InitialSkinning geometric_of(Method method, const SkinSetup& setup) {
   if (method == Method::kDdm) return InitialSkinning::kDdm;
   if (method == Method::kCor) return InitialSkinning::kCor;
+  if (method == Method::kTracking2014) return setup.tracker_anchor;
   return method == Method::kImplicit2013 ? setup.projector_initial : InitialSkinning::kDqs;
 }
 
@@ -417,7 +430,7 @@ const std::vector<std::uint8_t>* deform(const Skinner& sk, Method method, BakeSt
       s.field->set_pose(skin);
       const track::TrackStats ts = s.projector->project(s.field->function(), pos);
       if (!s.masked.empty()) {
-        rigid_positions(sk, s, skin, skinned, s.anchors);
+        rigid_positions(sk, s, skin, skinned, s.anchors, nullptr);
         blend_masked(s, s.anchors, pos);
       }
       st.tracker_calls = 1;

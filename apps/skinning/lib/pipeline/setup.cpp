@@ -407,12 +407,16 @@ void check_tracker_keys(const json& t, const std::string& w) {
               "smoothing_tangential",
               "smoothing_reproject_steps",
               "iso_tolerance",
-              "global_regularization"},
+              "global_regularization",
+              "anchor"},
              w);
 }
 
 void read_tracker(const json& t, const std::string& w, SkinSetup& s) {
   check_tracker_keys(t, w);
+  std::string anchor = to_string(s.tracker_anchor);
+  read(t, "anchor", anchor, w);
+  s.tracker_anchor = initial_skinning_from_string(anchor, w + ".anchor");
   if (t.contains("relaxation")) {
     std::string relaxation;
     read(t, "relaxation", relaxation, w);
@@ -507,9 +511,11 @@ void read_projector(const json& p, const std::string& w, track::ProjectorOptions
   read(p, "beta_diffusion_steps", projector.smoothing.beta_diffusion_steps, w);
   read(p, "stall_steps", projector.stall_steps, w);
   require(projector.stall_steps >= 0 && projector.stall_steps <= 255, w + ".stall_steps",
-          "must be in [0, 255] (got " + std::to_string(projector.stall_steps) + ")", "use 3, or 0 for none (2013)");
+          "must be in [0, 255] (got " + std::to_string(projector.stall_steps) + ")",
+          "use 3, or 0 for none (2013)");
   read(p, "progress", projector.progress, w);
-  require(projector.progress > 0.f && projector.progress <= 1.f, w + ".progress", "must be in (0, 1]", "use 0.9");
+  require(projector.progress > 0.f && projector.progress <= 1.f, w + ".progress", "must be in (0, 1]",
+          "use 0.9");
   read(p, "secant", projector.secant, w);
   read(p, "secant_max_factor", projector.secant_max_factor, w);
   require(projector.secant_max_factor > 0.f && projector.secant_max_factor <= 1.f, w + ".secant_max_factor",

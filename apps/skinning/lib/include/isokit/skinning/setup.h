@@ -188,6 +188,12 @@ struct SkinSetup {
   /// setup's `ddm` / `cor` options). Setup key `projector.initial`
   /// (docs/decisions/projector-initial-skinning.md).
   InitialSkinning projector_initial{InitialSkinning::kDqs};
+  /// tracking2014: where the relaxation mask pulls a masked vertex (2014 Fig. 11). "dqs" (the
+  /// default): its partition joint's rigid transform (a small part's vertex: its DQS position);
+  /// "ddm" or "cor": its position by that method. A rigid piece's vertices keep their piece's
+  /// transform either way. Setup key `tracker.anchor`
+  /// (docs/decisions/projector-initial-skinning.md, "The tracker's anchors").
+  InitialSkinning tracker_anchor{InitialSkinning::kDqs};
   DdmOptions ddm{};  ///< method `ddm` (Le & Lewis 2019). Setup key `ddm`
   CorOptions cor{};  ///< method `cor` (Le & Hodgins 2016). Setup key `cor`
   SubstepOptions substeps{};            ///< setup key `substeps`
