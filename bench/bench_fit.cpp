@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "bench_rigs.h"
 #include "isokit/skinning/fitted_rig.h"
 #include "isokit/skinning/pipeline.h"
 #include "isokit/skinning/procedural.h"
@@ -25,18 +26,8 @@ namespace fs = std::filesystem;
 
 std::vector<std::string> rig_specs() {
   std::vector<std::string> out{"procedural:humanoid"};
-  const char* env = std::getenv("ISOKIT_RIGS");
-  const fs::path folder = env ? env : "../shared/data/rigs";
-  std::error_code ec;
-  std::vector<std::string> files;
-  if (fs::is_directory(folder, ec))
-    for (const auto& e : fs::directory_iterator(folder, ec)) {
-      const std::string ext = e.path().extension().string();
-      if (ext == ".glb" || ext == ".gltf" || ext == ".fbx") files.push_back(e.path().string());
-    }
-  std::sort(files.begin(), files.end());
+  const std::vector<std::string> files = isokit::bench::real_rig_files();
   out.insert(out.end(), files.begin(), files.end());
-  if (fs::exists("../shared/data/Fox.glb", ec)) out.push_back("../shared/data/Fox.glb");
   return out;
 }
 

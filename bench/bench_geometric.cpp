@@ -25,7 +25,8 @@ using namespace isokit::skinning;
 const Rig& humanoid(int vertices, bool fingers) {
   static std::map<std::pair<int, bool>, Rig> rigs;
   auto it = rigs.find({vertices, fingers});
-  if (it == rigs.end()) it = rigs.emplace(std::make_pair(vertices, fingers), make_humanoid({vertices, fingers})).first;
+  if (it == rigs.end())
+    it = rigs.emplace(std::make_pair(vertices, fingers), make_humanoid({vertices, fingers})).first;
   return it->second;
 }
 
@@ -42,8 +43,16 @@ void BM_GeometricFrame(benchmark::State& state) {
   state.SetLabel(std::string(to_string(method)) + " " + std::to_string(sk->rig().rest.rows()) + " vertices");
 }
 // Args: method index in all_methods() (0 lbs, 1 dqs, 4 ddm, 5 cor).
-BENCHMARK(BM_GeometricFrame)->Arg(0)->Arg(1)->Arg(4)->Arg(5)->UseManualTime()->Unit(benchmark::kMillisecond)
-    ->Iterations(20)->Repetitions(5)->ReportAggregatesOnly(true);
+BENCHMARK(BM_GeometricFrame)
+    ->Arg(0)
+    ->Arg(1)
+    ->Arg(4)
+    ->Arg(5)
+    ->UseManualTime()
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(20)
+    ->Repetitions(5)
+    ->ReportAggregatesOnly(true);
 
 void BM_DdmPrecompute(benchmark::State& state) {
   const bool fingers = state.range(0) != 0;
@@ -58,8 +67,14 @@ void BM_DdmPrecompute(benchmark::State& state) {
   state.counters["bones_per_vertex"] = double(pairs) / double(rig.rest.rows());
   state.SetLabel(std::to_string(rig.rest.rows()) + " vertices, " + std::to_string(bones) + " bones");
 }
-BENCHMARK(BM_DdmPrecompute)->Arg(0)->Arg(1)->UseManualTime()->Unit(benchmark::kMillisecond)->Iterations(1)
-    ->Repetitions(5)->ReportAggregatesOnly(true);
+BENCHMARK(BM_DdmPrecompute)
+    ->Arg(0)
+    ->Arg(1)
+    ->UseManualTime()
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(1)
+    ->Repetitions(5)
+    ->ReportAggregatesOnly(true);
 
 void BM_CorPrecompute(benchmark::State& state) {
   const Rig& rig = humanoid(static_cast<int>(state.range(0)), true);
@@ -67,10 +82,17 @@ void BM_CorPrecompute(benchmark::State& state) {
     const CorSkinning cor(rig.rest, rig.triangles, rig.weights);
     state.SetIterationTime(cor.precompute_seconds());
   }
-  state.SetLabel(std::to_string(rig.rest.rows()) + " vertices, " + std::to_string(rig.joints.size()) + " joints");
+  state.SetLabel(std::to_string(rig.rest.rows()) + " vertices, " + std::to_string(rig.joints.size()) +
+                 " joints");
 }
-BENCHMARK(BM_CorPrecompute)->Arg(6000)->Arg(13000)->UseManualTime()->Unit(benchmark::kMillisecond)->Iterations(1)
-    ->Repetitions(3)->ReportAggregatesOnly(true);
+BENCHMARK(BM_CorPrecompute)
+    ->Arg(6000)
+    ->Arg(13000)
+    ->UseManualTime()
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(1)
+    ->Repetitions(3)
+    ->ReportAggregatesOnly(true);
 
 }  // namespace
 

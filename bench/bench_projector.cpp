@@ -20,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "bench_rigs.h"
 #include "isokit/implicit/evaluators.h"
 #include "isokit/skinning/animation.h"
 #include "isokit/skinning/deform.h"
@@ -31,21 +32,6 @@ namespace {
 using namespace isokit;
 using namespace isokit::skinning;
 namespace fs = std::filesystem;
-
-std::vector<std::string> rig_files() {
-  const char* env = std::getenv("ISOKIT_RIGS");
-  const fs::path folder = env ? env : "../shared/data/rigs";
-  std::error_code ec;
-  std::vector<std::string> files;
-  if (fs::is_directory(folder, ec))
-    for (const auto& e : fs::directory_iterator(folder, ec)) {
-      const std::string ext = e.path().extension().string();
-      if (ext == ".glb" || ext == ".gltf" || ext == ".fbx") files.push_back(e.path().string());
-    }
-  std::sort(files.begin(), files.end());
-  if (fs::exists("../shared/data/Fox.glb", ec)) files.push_back("../shared/data/Fox.glb");
-  return files;
-}
 
 /// A rig, its Skinner per rules and the poses of its first clip, loaded and fitted once.
 struct Case {
@@ -74,14 +60,19 @@ Case& load_case(const std::string& file) {
   return *cache.back().second;
 }
 
-void BM_Implicit2013(benchmark::State& state, const std::string& file, bool paper) {
-  Case* c = nullptr;
+/// The case of `file`, or null with the benchmark skipped and the loader's message.
+Case* case_or_skip(benchmark::State& state, const std::string& file) {
   try {
-    c = &load_case(file);
+    return &load_case(file);
   } catch (const std::exception& e) {
     state.SkipWithError(e.what());
-    return;
+    return nullptr;
   }
+}
+
+void BM_Implicit2013(benchmark::State& state, const std::string& file, bool paper) {
+  Case* c = case_or_skip(state, file);
+  if (!c) return;
   if (c->poses.empty()) {
     state.SkipWithError("the rig has no clip");
     return;
@@ -108,13 +99,8 @@ void BM_Implicit2013(benchmark::State& state, const std::string& file, bool pape
 /// `loop`: the instruction loop (ScalarEvaluator, what programs of more than 63 leaves ran before
 /// the two-word leaf mask), else the projector's path (the batch evaluator: sparse up to 127).
 void BM_FieldEval(benchmark::State& state, const std::string& file, bool loop) {
-  Case* c = nullptr;
-  try {
-    c = &load_case(file);
-  } catch (const std::exception& e) {
-    state.SkipWithError(e.what());
-    return;
-  }
+  Case* c = case_or_skip(state, file);
+  if (!c) return;
   SkinField& field = c->isokit->field(TreeKind::k2013);
   std::vector<std::vector<Vec3f>> points;
   std::vector<std::shared_ptr<const implicit::Pose>> poses;
@@ -155,7 +141,7 @@ void BM_FieldEval(benchmark::State& state, const std::string& file, bool loop) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  for (const std::string& file : rig_files()) {
+  for (const std::string& file : isokit::bench::real_rig_files()) {
     const std::string name = fs::path(file).stem().string();
     for (const bool paper : {false, true})
       benchmark::RegisterBenchmark(("BM_Implicit2013/" + name + (paper ? "/paper" : "/isokit")).c_str(),

@@ -410,7 +410,8 @@ void bind_skinning(py::module_& m) {
           py::arg("poses") = py::none(), py::arg("bends") = std::vector<std::string>{},
           py::arg("pose_script") = py::none(), py::arg("frames") = 31, py::arg("self_intersections") = true,
           py::arg("progress") = py::none(),
-          "Bakes one animation with `method` (lbs, dqs, ddm, cor, implicit2013, tracking2014): a clip by name, "
+          "Bakes one animation with `method` (lbs, dqs, ddm, cor, implicit2013, tracking2014): a clip by "
+          "name, "
           "bends ['JOINT:AXIS:DEGREES'], a pose script path, or poses (frames, joints, 4, 4); none plays "
           "the rig's only clip. As `isokit-skin bake`.");
 

@@ -281,7 +281,8 @@ TEST_CASE("pipeline: bad input to the skinner is rejected naming the item", "[sk
   CHECK_THROWS_WITH(setup_from_json(R"({"tracker": {"fold_repair_rings": -1}})", "s.json"),
                     Catch::Contains("s.json.tracker.fold_repair") && Catch::Contains(">= 0"));
   const SkinSetup pr = setup_from_json(
-      R"({"projector": {"stall_steps": 5, "progress": 0.8, "secant": false, "secant_max_factor": 1}})", "s.json");
+      R"({"projector": {"stall_steps": 5, "progress": 0.8, "secant": false, "secant_max_factor": 1}})",
+      "s.json");
   CHECK(pr.projector.stall_steps == 5);
   CHECK(pr.projector.progress == 0.8f);
   CHECK_FALSE(pr.projector.secant);

@@ -262,7 +262,8 @@ CLI::App* add_bake(CLI::App& app, Args& a) {
   auto* bake =
       app.add_subcommand("bake", "Deform a rig over an animation with one method and write the result");
   bake->add_option("RIG", a.rig, kRigHelp)->required();
-  bake->add_option("--method", a.method, "lbs | dqs | ddm | cor | implicit2013 | tracking2014")->capture_default_str();
+  bake->add_option("--method", a.method, "lbs | dqs | ddm | cor | implicit2013 | tracking2014")
+      ->capture_default_str();
   bake->add_option("--clip", a.animation.clip,
                    "animation clip of the file (or of --clip-file), by name; default: the only clip");
   bake->add_option(
@@ -299,7 +300,8 @@ CLI::App* add_view(CLI::App& app, isokit::viewer::ViewerGuiOptions& v) {
   view->add_option("RIG", v.rig, kRigHelp)->required();
   view->add_option("--clip", v.clip, "a clip of the file to play at start");
   view->add_option("--setup", v.setup, "JSON setup file");
-  view->add_option("--method", v.method, "lbs | dqs | ddm | cor | implicit2013 | tracking2014")->capture_default_str();
+  view->add_option("--method", v.method, "lbs | dqs | ddm | cor | implicit2013 | tracking2014")
+      ->capture_default_str();
   view->add_option("--size", v.width, "window width in pixels")->capture_default_str();
   view->add_option(
           "--edit-slice-ms", v.edit_slice_ms,

@@ -45,7 +45,7 @@ namespace {
 struct TriangleWeights {
   std::vector<double> area;
   std::vector<Eigen::Vector3d> centroid;
-  SkinWeights weights;  ///< CSR over triangles
+  SkinWeights weights;                    ///< CSR over triangles
   std::vector<std::vector<int>> by_bone;  ///< triangles with a weight on each bone
 };
 
@@ -119,7 +119,8 @@ CorSkinning::CorSkinning(const track::Positions& rest, const track::Triangles& t
   int joints = 0;
   for (int j : weights.joints) joints = std::max(joints, j + 1);
   d.rest.resize(n);
-  for (std::size_t i = 0; i < n; ++i) d.rest[i] = rest.row(static_cast<Eigen::Index>(i)).cast<double>().transpose();
+  for (std::size_t i = 0; i < n; ++i)
+    d.rest[i] = rest.row(static_cast<Eigen::Index>(i)).cast<double>().transpose();
   const TriangleWeights tw = triangle_weights(d.rest, triangles, weights, joints);
   d.center = d.rest;
   d.has_center.assign(n, 0);
@@ -130,7 +131,8 @@ CorSkinning::CorSkinning(const track::Positions& rest, const track::Triangles& t
     std::vector<std::pair<double, double>> pairs;
     for (std::size_t i = b; i < e; ++i) {
       if (weights.count(static_cast<int>(i)) < 2) continue;  // rigid with its bone
-      for (int k = weights.offsets[i]; k < weights.offsets[i + 1]; ++k) wp[weights.joints[k]] = weights.weights[k];
+      for (int k = weights.offsets[i]; k < weights.offsets[i + 1]; ++k)
+        wp[weights.joints[k]] = weights.weights[k];
       double den = 0;
       Eigen::Vector3d num = Eigen::Vector3d::Zero();
       for (int k = weights.offsets[i]; k < weights.offsets[i + 1]; ++k)
@@ -148,7 +150,8 @@ CorSkinning::CorSkinning(const track::Positions& rest, const track::Triangles& t
       }
     }
   });
-  for (std::size_t i = 0; i < n; ++i) d.fallback += weights.count(static_cast<int>(i)) >= 2 && !d.has_center[i];
+  for (std::size_t i = 0; i < n; ++i)
+    d.fallback += weights.count(static_cast<int>(i)) >= 2 && !d.has_center[i];
   d.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
@@ -181,7 +184,8 @@ void CorSkinning::deform(const std::vector<Affine>& skin, track::Positions& out,
           continue;
         }
         Eigen::Vector3d u = Eigen::Vector3d::Zero();
-        for (int k = w.offsets[i]; k < w.offsets[i + 1]; ++k) u += double(w.weights[k]) * (m[w.joints[k]] * pr);
+        for (int k = w.offsets[i]; k < w.offsets[i + 1]; ++k)
+          u += double(w.weights[k]) * (m[w.joints[k]] * pr);
         out.row(static_cast<Eigen::Index>(i)) = u.cast<float>().transpose();
         continue;
       }

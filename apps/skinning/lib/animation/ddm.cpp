@@ -9,10 +9,10 @@
 #include <cmath>
 #include <functional>
 
+#include "animation/rotation_fit.h"
 #include "isokit/core/error.h"
 #include "isokit/core/parallel.h"
 #include "isokit/skinning/deform.h"
-#include "animation/rotation_fit.h"
 
 namespace isokit::skinning {
 
@@ -93,7 +93,8 @@ struct DirectDeltaMush::Data {
 
 void check_ddm_options(const DdmOptions& o, const std::string& where) {
   require(o.smoothing_steps >= 0 && o.smoothing_steps <= 100, where + ".smoothing_steps",
-          "must be in [0, 100] (got " + std::to_string(o.smoothing_steps) + ")", "use 3 (0 = no smoothing: LBS)");
+          "must be in [0, 100] (got " + std::to_string(o.smoothing_steps) + ")",
+          "use 3 (0 = no smoothing: LBS)");
   require(std::isfinite(o.lambda) && o.lambda >= 0 && o.lambda <= 1000, where + ".lambda",
           "must be in [0, 1000] (got " + format_number(o.lambda) + ")", "use 3");
   require(std::isfinite(o.kappa) && o.kappa >= 0 && o.kappa <= 1000, where + ".kappa",
@@ -141,28 +142,9 @@ double weight_of(const SkinWeights& w, Eigen::Index v, int joint) {
   return 0.0;
 }
 
-}  // namespace
-
-DirectDeltaMush::DirectDeltaMush(const track::Positions& rest, const track::Triangles& triangles,
-                                 const SkinWeights& weights, int joints, const DdmOptions& options)
-    : d_(std::make_unique<Data>()) {
-  const auto t0 = std::chrono::steady_clock::now();
-  check_ddm_options(options, "ddm");
-  const Eigen::Index n = rest.rows();
-  require(static_cast<Eigen::Index>(weights.offsets.size()) == n + 1, "ddm", "the weights need one entry per vertex",
-          "compute or load weights for this mesh");
-  Data& d = *d_;
-  d.options = options;
-  d.joints = joints;
-  const Eigen::MatrixXd p = rest.cast<double>();
-  d.shift = 0.5 * (p.colwise().minCoeff() + p.colwise().maxCoeff()).transpose();
-  d.rest.resize(static_cast<std::size_t>(n) * 3);
-  for (Eigen::Index i = 0; i < n; ++i)
-    for (int c = 0; c < 3; ++c) d.rest[static_cast<std::size_t>(i * 3 + c)] = p(i, c) - d.shift[c];
-  auto point = [&](Eigen::Index i) { return Eigen::Vector3d(d.rest.data() + i * 3); };
-
-  // The total smoothed weight per vertex (pruning is relative to it).
-  const ImplicitSmoother sm(triangles, n, options.lambda);
+/// The total smoothed weight per vertex (pruning is relative to it).
+Eigen::MatrixXd smoothed_total(const ImplicitSmoother& sm, const SkinWeights& weights, Eigen::Index n,
+                               const DdmOptions& options) {
   Eigen::MatrixXd total(n, 1);
   for (Eigen::Index i = 0; i < n; ++i) {
     double s = 0;
@@ -172,31 +154,40 @@ DirectDeltaMush::DirectDeltaMush(const track::Positions& rest, const track::Tria
   const Eigen::MatrixXd total_x = total;
   sm.apply(total, options.smoothing_steps);
   if (options.alpha > 0) total = (1.0 - options.alpha) * total + options.alpha * total_x;
+  return total;
+}
 
-  std::unique_ptr<ImplicitSmoother> sk;
-  if (options.variant == DdmVariant::kV1) sk = std::make_unique<ImplicitSmoother>(triangles, n, options.kappa);
+/// One kept (vertex, bone) pair of Ω: its moments, then v1's κ-smoothed centroid moments.
+struct Pair {
+  int bone;
+  double m[kMoments + kCentroid];
+};
 
-  // Blocks of bones, solved in parallel; each block's kept pairs collected per vertex.
+/// The pairs kept by the pruning rule, per block of bones (solved in parallel) and per vertex.
+/// `rest`: the shifted rest positions, 3 per vertex; `sk`: v1's κ smoother, else null.
+std::vector<std::vector<std::vector<Pair>>> kept_pairs(const ImplicitSmoother& sm, const ImplicitSmoother* sk,
+                                                       const SkinWeights& weights, int joints,
+                                                       const DdmOptions& options,
+                                                       const Eigen::MatrixXd& total,
+                                                       const std::vector<double>& rest) {
+  const Eigen::Index n = total.rows();
+  auto point = [&](Eigen::Index i) { return Eigen::Vector3d(rest.data() + i * 3); };
   const int blocks = (joints + kBonesPerBlock - 1) / kBonesPerBlock;
-  struct Pair {
-    int bone;
-    double m[kMoments + kCentroid];
-  };
   std::vector<std::vector<std::vector<Pair>>> kept(static_cast<std::size_t>(blocks));
   parallel_for(static_cast<std::size_t>(blocks), 1, [&](std::size_t b0, std::size_t b1) {
     for (std::size_t b = b0; b < b1; ++b) {
       const int first = int(b) * kBonesPerBlock, count = std::min(kBonesPerBlock, joints - first);
-      const Eigen::MatrixXd y = smoothed_block(sm, options, n, first, count, kMoments,
-                                               [&](Eigen::Index i, int j, double* out) {
-                                                 moments(point(i), weight_of(weights, i, j), out);
-                                               });
+      const Eigen::MatrixXd y = smoothed_block(
+          sm, options, n, first, count, kMoments,
+          [&](Eigen::Index i, int j, double* out) { moments(point(i), weight_of(weights, i, j), out); });
       Eigen::MatrixXd yk;
       if (sk)
-        yk = smoothed_block(*sk, options, n, first, count, kCentroid, [&](Eigen::Index i, int j, double* out) {
-          double m[kMoments];
-          moments(point(i), weight_of(weights, i, j), m);
-          std::copy(m + 6, m + 10, out);
-        });
+        yk =
+            smoothed_block(*sk, options, n, first, count, kCentroid, [&](Eigen::Index i, int j, double* out) {
+              double m[kMoments];
+              moments(point(i), weight_of(weights, i, j), m);
+              std::copy(m + 6, m + 10, out);
+            });
       auto& mine = kept[b];
       mine.resize(static_cast<std::size_t>(n));
       for (Eigen::Index i = 0; i < n; ++i)
@@ -205,11 +196,40 @@ DirectDeltaMush::DirectDeltaMush(const track::Positions& rest, const track::Tria
           if (!(mass > 0) || mass < options.prune * total(i, 0)) continue;
           Pair pr{first + c, {}};
           for (int k = 0; k < kMoments; ++k) pr.m[k] = y(i, Eigen::Index(c) * kMoments + k);
-          for (int k = 0; k < kCentroid; ++k) pr.m[kMoments + k] = sk ? yk(i, Eigen::Index(c) * kCentroid + k) : 0.0;
+          for (int k = 0; k < kCentroid; ++k)
+            pr.m[kMoments + k] = sk ? yk(i, Eigen::Index(c) * kCentroid + k) : 0.0;
           mine[static_cast<std::size_t>(i)].push_back(pr);
         }
     }
   });
+  return kept;
+}
+
+}  // namespace
+
+DirectDeltaMush::DirectDeltaMush(const track::Positions& rest, const track::Triangles& triangles,
+                                 const SkinWeights& weights, int joints, const DdmOptions& options)
+    : d_(std::make_unique<Data>()) {
+  const auto t0 = std::chrono::steady_clock::now();
+  check_ddm_options(options, "ddm");
+  const Eigen::Index n = rest.rows();
+  require(static_cast<Eigen::Index>(weights.offsets.size()) == n + 1, "ddm",
+          "the weights need one entry per vertex", "compute or load weights for this mesh");
+  Data& d = *d_;
+  d.options = options;
+  d.joints = joints;
+  const Eigen::MatrixXd p = rest.cast<double>();
+  d.shift = 0.5 * (p.colwise().minCoeff() + p.colwise().maxCoeff()).transpose();
+  d.rest.resize(static_cast<std::size_t>(n) * 3);
+  for (Eigen::Index i = 0; i < n; ++i)
+    for (int c = 0; c < 3; ++c) d.rest[static_cast<std::size_t>(i * 3 + c)] = p(i, c) - d.shift[c];
+
+  const ImplicitSmoother sm(triangles, n, options.lambda);
+  std::unique_ptr<ImplicitSmoother> sk;
+  if (options.variant == DdmVariant::kV1)
+    sk = std::make_unique<ImplicitSmoother>(triangles, n, options.kappa);
+  const auto kept =
+      kept_pairs(sm, sk.get(), weights, joints, options, smoothed_total(sm, weights, n, options), d.rest);
 
   // Flatten into CSR, with the per-vertex sums and the dominant bone.
   d.sums.assign(static_cast<std::size_t>(n) * 8, 0.0);
@@ -233,7 +253,8 @@ DirectDeltaMush::DirectDeltaMush(const track::Positions& rest, const track::Tria
 
 DirectDeltaMush::~DirectDeltaMush() = default;
 
-void DirectDeltaMush::deform(const std::vector<Affine>& skin, track::Positions& out, std::size_t grain) const {
+void DirectDeltaMush::deform(const std::vector<Affine>& skin, track::Positions& out,
+                             std::size_t grain) const {
   const Data& d = *d_;
   require(static_cast<int>(skin.size()) >= d.joints, "ddm", "fewer skinning matrices than joints",
           "pass one skinning matrix per joint");

@@ -24,8 +24,10 @@ inline Eigen::Matrix3d best_rotation(const Eigen::Matrix3d& a, Eigen::Quaternion
   const Eigen::Matrix3d an = a / norm;
   Eigen::Matrix3d r = start.toRotationMatrix();
   for (int it = 0; it < max_steps; ++it) {
-    const Eigen::Vector3d num = r.col(0).cross(an.col(0)) + r.col(1).cross(an.col(1)) + r.col(2).cross(an.col(2));
-    const double den = std::abs(r.col(0).dot(an.col(0)) + r.col(1).dot(an.col(1)) + r.col(2).dot(an.col(2))) + 1e-9;
+    const Eigen::Vector3d num =
+        r.col(0).cross(an.col(0)) + r.col(1).cross(an.col(1)) + r.col(2).cross(an.col(2));
+    const double den =
+        std::abs(r.col(0).dot(an.col(0)) + r.col(1).dot(an.col(1)) + r.col(2).dot(an.col(2))) + 1e-9;
     const Eigen::Vector3d w = num / den;
     const double angle = w.norm();
     if (angle < 1e-10) return r;

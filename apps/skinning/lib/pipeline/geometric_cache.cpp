@@ -55,7 +55,7 @@ struct Cache {
 }  // namespace
 
 std::uint64_t ddm_cache_key(const Rig& rig, const DdmOptions& o) {
-  const double values[] = {double(o.smoothing_steps), o.lambda, o.kappa, o.alpha, o.prune,
+  const double values[] = {double(o.smoothing_steps),          o.lambda, o.kappa, o.alpha, o.prune,
                            double(static_cast<int>(o.variant))};
   return hash_bytes(values, 6, rig_key(rig, "ddm"));
 }
@@ -75,8 +75,9 @@ std::shared_ptr<const DirectDeltaMush> cached_ddm(const Rig& rig, const DdmOptio
 
 std::shared_ptr<const CorSkinning> cached_cor(const Rig& rig, const CorOptions& o) {
   static Cache<CorSkinning> cache;
-  return cache.get(cor_cache_key(rig, o),
-                   [&] { return std::make_shared<const CorSkinning>(rig.rest, rig.triangles, rig.weights, o); });
+  return cache.get(cor_cache_key(rig, o), [&] {
+    return std::make_shared<const CorSkinning>(rig.rest, rig.triangles, rig.weights, o);
+  });
 }
 
 }  // namespace isokit::skinning

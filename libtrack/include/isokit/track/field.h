@@ -61,17 +61,17 @@ struct TrackStats {
   float max_move{0};       ///< largest vertex move in the last iteration
   float max_residual{0};   ///< max |f(v) - iso_v| over vertices outside the smoothed contact region, not free
   float mean_residual{0};  ///< mean of the same
-  int contact_vertices{0};    ///< vertices flagged by the field or stopped by the gradient-angle rule
-  int smoothed_vertices{0};   ///< vertices with diffused beta > 0 (moved by contact smoothing)
-  int oriented_vertices{0};   ///< vertices moved by the orientation repair (2014 tracker)
-  int lost_vertices{0};       ///< zero / non-finite gradient: left in place (e.g. outside the support)
+  int contact_vertices{0};   ///< vertices flagged by the field or stopped by the gradient-angle rule
+  int smoothed_vertices{0};  ///< vertices with diffused beta > 0 (moved by contact smoothing)
+  int oriented_vertices{0};  ///< vertices moved by the orientation repair (2014 tracker)
+  int lost_vertices{0};      ///< zero / non-finite gradient: left in place (e.g. outside the support)
   /// 2013 projector: vertices stopped for making no progress (ProjectorOptions::stall_steps)
   int stalled_vertices{0};
-  int free_vertices{0};       ///< not held to their iso-value (VertexFlags::free; 2014 tracker)
+  int free_vertices{0};  ///< not held to their iso-value (VertexFlags::free; 2014 tracker)
   /// triangles whose normal points along +∇f at their centroid (2013 projector: 0 unless
   /// ProjectorOptions::count_inverted)
   int inverted_triangles{0};
-  double seconds{0};          ///< wall time of the call
+  double seconds{0};  ///< wall time of the call
 };
 
 /// Per-vertex outputs of the last call (same order as the mesh vertices).

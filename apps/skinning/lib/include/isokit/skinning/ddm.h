@@ -89,8 +89,8 @@ class DirectDeltaMush {
 
   /// Ω_ij as stored (zero when pruned). For tests and inspection.
   Eigen::Matrix4d omega(int vertex, int joint) const;
-  std::size_t stored_pairs() const;      ///< (vertex, bone) pairs kept
-  double precompute_seconds() const;     ///< wall time of the precomputation
+  std::size_t stored_pairs() const;   ///< (vertex, bone) pairs kept
+  double precompute_seconds() const;  ///< wall time of the precomputation
   const DdmOptions& options() const;
 
  private:

@@ -23,9 +23,9 @@ struct ReportContext {
 };
 
 /// The metrics JSON: `{rig, vertices, triangles, joints, animation, fps, threads, fit_seconds,
-/// rest_agreement, closed, components, methods: {name: {mean_ms, ratio_to_dqs, vertex_iterations_per_second, setup_seconds,
-/// rest_recovery, tracker_calls, capped_calls, capped_share, worst, frames: [...]}}}`. Values not
-/// computed are `null` (docs/skinning-metrics.md, "The metrics JSON").
+/// rest_agreement, closed, components, methods: {name: {mean_ms, ratio_to_dqs, vertex_iterations_per_second,
+/// setup_seconds, rest_recovery, tracker_calls, capped_calls, capped_share, worst, frames: [...]}}}`. Values
+/// not computed are `null` (docs/skinning-metrics.md, "The metrics JSON").
 std::string metrics_json(const Rig& rig, const std::vector<BakeResult>& results,
                          const ReportContext& context);
 

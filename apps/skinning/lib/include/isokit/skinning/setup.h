@@ -194,9 +194,9 @@ struct SkinSetup {
   /// transform either way. Setup key `tracker.anchor`
   /// (docs/decisions/projector-initial-skinning.md, "The tracker's anchors").
   InitialSkinning tracker_anchor{InitialSkinning::kDqs};
-  DdmOptions ddm{};  ///< method `ddm` (Le & Lewis 2019). Setup key `ddm`
-  CorOptions cor{};  ///< method `cor` (Le & Hodgins 2016). Setup key `cor`
-  SubstepOptions substeps{};            ///< setup key `substeps`
+  DdmOptions ddm{};           ///< method `ddm` (Le & Lewis 2019). Setup key `ddm`
+  CorOptions cor{};           ///< method `cor` (Le & Hodgins 2016). Setup key `cor`
+  SubstepOptions substeps{};  ///< setup key `substeps`
   /// Where a rig file keeps its painted relaxation mask (setup key `mask`: `attribute`,
   /// `color_set`, `channel` "r" | "g" | "b" | "a"); read by open_rig. Default: the glTF attribute
   /// `_RELAX_MASK`.
