@@ -15,6 +15,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.collections import PolyCollection  # noqa: E402
 
+from figure_poses import bend_poses  # noqa: E402  (scripts/)
 from isokit import skinning  # noqa: E402
 
 BICEPS = {"version": 1, "muscles": [
@@ -22,18 +23,6 @@ BICEPS = {"version": 1, "muscles": [
      "radii": [0.3, 0.14, 0.14], "scale_axes": "yz", "curve": [[0, 1], [90, 1.8]]}]}
 FRAMES = (0, 5, 10, 15, 20)  # 0, 45, 90, 45, 0 degrees
 
-
-def bend_poses(rig, joint, degrees, frames):
-    """Rest -> `degrees` about the joint's x -> rest, `frames` poses."""
-    rest = rig.rest_pose()
-    poses = np.repeat(rest[None], frames, axis=0)
-    j = rig.joints.index(joint)
-    for f in range(frames):
-        a = np.radians(degrees) * (1 - abs(2 * f / (frames - 1) - 1))
-        r = np.eye(4)
-        r[1:3, 1:3] = [[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]]
-        poses[f, j] = rest[j] @ r
-    return poses
 
 
 def draw(ax, pos, tris, colour):

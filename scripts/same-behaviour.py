@@ -5,10 +5,13 @@ Runs `isokit-skin demo` and a bake of the procedural humanoid with each build's 
 then compares the outputs: the metrics JSON must be equal except the timing fields, and the
 baked .glb files byte for byte.
 
-  scripts/same-behaviour.py OLD_BUILD NEW_BUILD [--out DIR] [--quick]
+  scripts/same-behaviour.py OLD_BUILD NEW_BUILD [--out DIR] [--quick] [--allow-added-fields]
 
 OLD_BUILD / NEW_BUILD are CMake build folders (holding apps/skinning/isokit-skin). --quick runs a
 4,000-vertex humanoid with 9 frames (a minute) instead of the README demo (13k, 31 frames).
+--allow-added-fields accepts metrics fields that only the new build writes (a new metric), listing
+them. The demo writes the default method's .glb: the .glb files both demos wrote are compared (none
+when the default method changed between the builds; the bake's .glb is compared in any case).
 Exit 0 when everything is identical; 1 with the differences listed otherwise.
 """
 import argparse
@@ -20,7 +23,7 @@ import subprocess
 import sys
 
 # Fields that measure time, not behaviour.
-TIMING = {"mean_ms", "ms", "ratio_to_dqs", "vertex_iterations_per_second", "fit_seconds"}
+TIMING = {"mean_ms", "ms", "ratio_to_dqs", "vertex_iterations_per_second", "fit_seconds", "setup_seconds"}
 
 
 def strip_timing(node):
@@ -31,19 +34,23 @@ def strip_timing(node):
     return node
 
 
-def differences(a, b, path="$"):
-    """Paths where two JSON values differ (NaN equals NaN)."""
+def differences(a, b, path="$", added=None):
+    """Paths where two JSON values differ (NaN equals NaN). With `added` (a set), keys only in `b`
+    are collected there instead of counted as differences."""
     if isinstance(a, dict) and isinstance(b, dict):
-        out = [f"{path}.{k}: only in one file" for k in sorted(set(a) ^ set(b))]
+        only_new = set(b) - set(a) if added is not None else set()
+        if added is not None:
+            added.update(f"{path}.{k}" for k in only_new)
+        out = [f"{path}.{k}: only in one file" for k in sorted((set(a) ^ set(b)) - only_new)]
         for k in sorted(set(a) & set(b)):
-            out += differences(a[k], b[k], f"{path}.{k}")
+            out += differences(a[k], b[k], f"{path}.{k}", added)
         return out
     if isinstance(a, list) and isinstance(b, list):
         if len(a) != len(b):
             return [f"{path}: {len(a)} vs {len(b)} entries"]
         out = []
         for i, (x, y) in enumerate(zip(a, b)):
-            out += differences(x, y, f"{path}[{i}]")
+            out += differences(x, y, f"{path}[{i}]", added)
         return out
     if isinstance(a, float) and isinstance(b, float) and math.isnan(a) and math.isnan(b):
         return []
@@ -64,7 +71,16 @@ def cases(quick):
     bake = ["bake", f"procedural:humanoid?vertices={vertices}", "--method", "tracking2014",
             "--bend", "RightForeArm:x:120", "--bend", "RightLeg:x:120", "--frames", str(frames),
             "--compare", "--no-self-intersections"]
-    return {"demo": (demo, "metrics.json", "tracking2014.glb"), "bake": (bake, "metrics.json", "bake.glb")}
+    return {"demo": (demo, "metrics.json", None), "bake": (bake, "metrics.json", "bake.glb")}
+
+
+def same_glbs(old_dir, new_dir, glb):
+    """(compared names, names that differ): `glb`, or every .glb both folders hold."""
+    names = [glb] if glb else sorted(set(f for f in os.listdir(old_dir) if f.endswith(".glb")) &
+                                     set(f for f in os.listdir(new_dir) if f.endswith(".glb")))
+    differ = [n for n in names
+              if not filecmp.cmp(os.path.join(old_dir, n), os.path.join(new_dir, n), shallow=False)]
+    return names, differ
 
 
 def main():
@@ -73,6 +89,7 @@ def main():
     ap.add_argument("new")
     ap.add_argument("--out", default="out/same-behaviour")
     ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--allow-added-fields", action="store_true")
     a = ap.parse_args()
     problems = []
     for name, (args, metrics, glb) in cases(a.quick).items():
@@ -90,13 +107,15 @@ def main():
             old = strip_timing(json.load(f))
         with open(os.path.join(outs["new"], metrics)) as f:
             new = strip_timing(json.load(f))
-        diff = differences(old, new)
+        added = set() if a.allow_added_fields else None
+        diff = differences(old, new, added=added)
         problems += [f"{name}: metrics {d}" for d in diff[:20]]
-        if not filecmp.cmp(os.path.join(outs["old"], glb), os.path.join(outs["new"], glb), shallow=False):
-            problems.append(f"{name}: {glb} differs")
+        names, differ = same_glbs(outs["old"], outs["new"], glb)
+        problems += [f"{name}: {n} differs" for n in differ]
+        fields = sorted({p.split(".")[-1] for p in added or ()})
         print(f"same-behaviour: {name}: metrics {'identical' if not diff else f'{len(diff)} differences'}"
-              f" (timing fields aside), {glb} "
-              f"{'identical' if not problems or not problems[-1].endswith('differs') else 'differs'}")
+              f" (timing fields aside{'; fields added: ' + ', '.join(fields) if fields else ''}), "
+              f"{', '.join(names) or 'no .glb in common'} {'identical' if not differ else 'differ'}")
     for p in problems:
         print("  " + p)
     return 1 if problems else 0

@@ -41,6 +41,12 @@ def _isokit_version():
     return isokit.__version__
 
 
+def _default_method():
+    """isokit's default method (isokit.skinning.DEFAULT_METHOD: the score's first implicit method)."""
+    from isokit import skinning
+    return skinning.DEFAULT_METHOD
+
+
 def load_manifest(path):
     """The manifest's jobs as dicts with absolute paths (relative ones are relative to the manifest).
 
@@ -72,9 +78,11 @@ def load_manifest(path):
         unknown = set(job) - _JOB_KEYS
         if unknown:
             raise ManifestError(f"{where}: unknown key(s) {sorted(unknown)}; known: {sorted(_JOB_KEYS)}")
-        for key in ("rig", "method", "outputs"):
+        for key in ("rig", "outputs"):
             if key not in job:
                 raise ManifestError(f'{where}: "{key}" is missing')
+        if "method" not in job:  # isokit's default, fixed here so that the job's key names it
+            job["method"] = _default_method()
         name = job.get("name", f"job{i}")
         if name in names:
             raise ManifestError(f'{where}: the name "{name}" is used twice')

@@ -81,6 +81,8 @@ Row method_row(const json& m, bool closed) {
   Row r;
   r["frames"] = frames.size();
   r["self_overlap_new"] = worst_over(frames, "self_overlap_new");
+  r["skin_overlap_new"] = worst_over(frames, "skin_overlap_new");
+  r["folded_new"] = worst_over(frames, "folded_new");
   r["self_intersections_new"] = worst_over(frames, "self_intersections_new");
   r["self_intersections"] = worst.value("self_intersections", json(nullptr));
   r["new_inverted_triangles"] = worst.value("new_inverted_triangles", json(nullptr));
@@ -150,20 +152,21 @@ Row error_row(const std::string& rig, const std::string& animation, const std::s
 
 std::string markdown_table(const std::vector<Row>& rows) {
   std::ostringstream o;
-  o << "| rig | animation | method | frames | overlap new (%) | self-int. new (all) | new inverted "
-       "| edge dist. max / mean | volume min / max | iso residual | rest recovery | ms mean / worst | calls "
-       "at cap "
-       "| iterations per call median / p95 |\n"
-       "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+  o << "| rig | animation | method | frames | overlap new (%) | skin overlap new (%) | self-int. new (all) "
+       "| folded new | new inverted | edge dist. max / mean | volume min / max | iso residual | rest "
+       "recovery "
+       "| ms mean / worst | calls at cap | iterations per call median / p95 |\n"
+       "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
   for (const Row& r : rows) {
     o << "| " << r.value("rig", "") << " | " << r.value("animation", "") << " | " << r.value("method", "")
       << " | ";
     if (r.contains("error") && r["error"].is_string()) {
-      o << "**failed:** " << r["error"].get<std::string>() << " | | | | | | | | | | |\n";
+      o << "**failed:** " << r["error"].get<std::string>() << " | | | | | | | | | | | | |\n";
       continue;
     }
     o << r["frames"].get<int>() << " | " << cell(percent(r["self_overlap_new"]), "%.4f") << " | "
-      << count_cell(r["self_intersections_new"]) << " (" << count_cell(r["self_intersections"]) << ") | "
+      << cell(percent(r["skin_overlap_new"]), "%.4f") << " | " << count_cell(r["self_intersections_new"])
+      << " (" << count_cell(r["self_intersections"]) << ") | " << count_cell(r["folded_new"]) << " | "
       << count_cell(r["new_inverted_triangles"]) << " | " << cell(r["edge_distortion_max"], "%.2f") << " / "
       << cell(r["edge_distortion_mean"], "%.3f") << " | "
       << (r["closed"].get<bool>()

@@ -163,6 +163,7 @@ void write_tables(const Run& run) {
   nlohmann::json j{{"date", date},
                    {"commit", run.args.commit},
                    {"threads", std::thread::hardware_concurrency()},
+                   {"default_method", to_string(kDefaultMethod)},
                    {"max_frames", run.args.max_frames},
                    {"bend_frames", run.args.bend_frames},
                    {"bend_degrees", run.args.bend_degrees},

@@ -83,4 +83,14 @@ void write_text_file_atomically(const std::string& path, const std::string& cont
   write_bytes_atomically(path, contents.data(), contents.size());
 }
 
+void make_output_folder(const std::string& dir, const std::string& what) {
+  if (dir.empty()) return;
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  const bool is_dir = fs::is_directory(dir, ec);
+  require(is_dir, what + " '" + dir + "'",
+          ec ? "cannot be created (" + ec.message() + ")" : "exists and is not a folder",
+          "give a folder in a writable place");
+}
+
 }  // namespace isokit

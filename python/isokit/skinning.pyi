@@ -40,7 +40,10 @@ class Rig:
 def self_overlap(
     vertices: npt.ArrayLike, triangles: npt.ArrayLike, resolution: int = 160, mark_triangles: bool = False
 ) -> Dict[str, Any]: ...
+def folded_triangles(rig: Rig, frames: npt.ArrayLike, poses: npt.ArrayLike) -> npt.NDArray[np.bool_]: ...
 def load(path: _Path, fps: float = 30.0, progress: _Progress = None) -> Rig: ...
+
+DEFAULT_METHOD: str
 
 class BakeResult:
     @property
@@ -59,7 +62,7 @@ class Skinner:
     def fit_seconds(self) -> float: ...
     def bake(
         self,
-        method: str = "tracking2014",
+        method: str = "implicit2013",
         *,
         clip: Optional[str] = None,
         poses: Optional[npt.ArrayLike] = None,

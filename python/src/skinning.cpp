@@ -228,7 +228,44 @@ py::dict self_overlap_of(const py::object& vertices, const py::object& triangles
   return out;
 }
 
+/// `folded_triangles(rig, frames, poses)`: per frame and triangle, folded (folds.h) and not folded
+/// at rest, as a (F, T) bool array.
+py::array_t<bool> folded_triangles_of(const Rig& rig, const py::object& frames, const py::object& poses) {
+  const py::array_t<float, py::array::c_style | py::array::forcecast> a(frames);
+  const std::vector<Pose> p = poses_from(poses, rig.joints.size());
+  require(a.ndim() == 3 && a.shape(1) == rig.rest.rows() && a.shape(2) == 3, "folded_triangles: frames",
+          "must be (frames, " + std::to_string(rig.rest.rows()) + ", 3)",
+          "pass BakeResult.frames of this rig");
+  require(static_cast<std::size_t>(a.shape(0)) == p.size(), "folded_triangles: poses",
+          "one pose per frame is needed (" + std::to_string(a.shape(0)) + " frames, " +
+              std::to_string(p.size()) + " poses)",
+          "pass the poses the frames were baked at");
+  const std::size_t nf = p.size(), nt = static_cast<std::size_t>(rig.triangles.rows());
+  py::array_t<bool> out({static_cast<py::ssize_t>(nf), static_cast<py::ssize_t>(nt)});
+  bool* dst = out.mutable_data();
+  const float* src = a.data();
+  {
+    py::gil_scoped_release released;
+    const SkinReference ref = metrics_reference(rig);
+    const FoldCounter folds(rig.rest, rig.triangles, ref.weights, ref.rest_skin);
+    track::Positions posed(rig.rest.rows(), 3);
+    for (std::size_t f = 0; f < nf; ++f) {
+      std::memcpy(posed.data(), src + f * std::size_t(rig.rest.rows()) * 3,
+                  std::size_t(rig.rest.rows()) * 3 * sizeof(float));
+      const std::vector<std::uint8_t> flags = folds.folded(posed, skinning_matrices(rig, p[f]));
+      for (std::size_t t = 0; t < nt; ++t) dst[f * nt + t] = flags[t] && !folds.rest_folded()[t];
+    }
+  }
+  return out;
+}
+
 void bind_skinning(py::module_& m) {
+  m.attr("DEFAULT_METHOD") = std::string(to_string(kDefaultMethod));
+  m.def("folded_triangles", &folded_triangles_of, py::arg("rig"), py::arg("frames"), py::arg("poses"),
+        "Per frame and triangle: folded, its normal turned by more than 90 degrees from its rest normal "
+        "carried by the skinning blend's rotation, and not folded at rest (the metrics' folded_new; "
+        "docs/skinning-metrics.md, 'Folds'). frames (F, V, 3) and their poses (F, joints, 4, 4); "
+        "returns a (F, triangles) bool array.");
   m.def("self_overlap", &self_overlap_of, py::arg("vertices"), py::arg("triangles"),
         py::arg("resolution") = 160, py::arg("mark_triangles") = false,
         "Interpenetration by volume: the volume the mesh encloses twice (winding number >= 2) and "
@@ -406,10 +443,10 @@ void bind_skinning(py::module_& m) {
             released.run([&] { out.result = s.skinner->bake(mth, animation.poses, bo); });
             return out;
           },
-          py::arg("method") = "tracking2014", py::kw_only(), py::arg("clip") = py::none(),
-          py::arg("poses") = py::none(), py::arg("bends") = std::vector<std::string>{},
-          py::arg("pose_script") = py::none(), py::arg("frames") = 31, py::arg("self_intersections") = true,
-          py::arg("progress") = py::none(),
+          py::arg("method") = std::string(to_string(kDefaultMethod)), py::kw_only(),
+          py::arg("clip") = py::none(), py::arg("poses") = py::none(),
+          py::arg("bends") = std::vector<std::string>{}, py::arg("pose_script") = py::none(),
+          py::arg("frames") = 31, py::arg("self_intersections") = true, py::arg("progress") = py::none(),
           "Bakes one animation with `method` (lbs, dqs, ddm, cor, implicit2013, tracking2014): a clip by "
           "name, "
           "bends ['JOINT:AXIS:DEGREES'], a pose script path, or poses (frames, joints, 4, 4); none plays "

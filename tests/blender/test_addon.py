@@ -135,6 +135,10 @@ def main():
     # (a) against the glTF export loaded by isokit.
     from isokit import skinning
 
+    check(core.DEFAULT_METHOD == skinning.DEFAULT_METHOD
+          and scene.isokit.method == skinning.DEFAULT_METHOD,
+          f"the add-on's default method is isokit's ({skinning.DEFAULT_METHOD})")
+
     glb = os.path.join(OUT, "rig.glb")
     bpy.ops.object.select_all(action="SELECT")
     bpy.ops.export_scene.gltf(filepath=glb, export_format="GLB", export_animations=True, export_skins=True,

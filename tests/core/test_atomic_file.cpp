@@ -157,3 +157,17 @@ TEST_CASE("atomic files: bad targets give one line naming the path", "[core][ato
   }
   CHECK(folder_entries(dir).empty());
 }
+
+TEST_CASE("make_output_folder creates a missing folder and its parents, or names what is in the way",
+          "[core][unit]") {
+  const fs::path dir = scratch("output_folder");
+  const fs::path nested = dir / "a" / "b";
+  make_output_folder(nested.string(), "--screenshot-dir");
+  CHECK(fs::is_directory(nested));
+  make_output_folder(nested.string(), "--screenshot-dir");  // already there: fine
+  write_text_file_atomically((dir / "file").string(), "x");
+  const std::string e = error_of([&] { make_output_folder((dir / "file").string(), "--screenshot-dir"); });
+  CHECK(e.find("--screenshot-dir") != std::string::npos);
+  CHECK(e.find("file") != std::string::npos);
+  CHECK(e.find('\n') == std::string::npos);
+}

@@ -72,17 +72,22 @@ TEST_CASE("eval: rows use the optional metrics when present and show — when ab
   CHECK(rows[0]["worst_ms"] == 3);
   CHECK(rows[0]["volume_ratio_min"] == 0.9);
   CHECK(markdown_table(rows).find("— (7)") != std::string::npos);
+  CHECK(rows[0]["skin_overlap_new"].is_null());
+  CHECK(rows[0]["folded_new"].is_null());
 
   m["closed"] = false;
   m["methods"]["tracking2014"]["frames"] = nlohmann::json::parse(R"([
     {"ms": 2, "volume_ratio": 0.9, "self_intersections_new": 1, "tracker_calls": 10, "capped_calls": 1,
-     "call_iterations": [5, 1, 9], "self_overlap_new": 0.00125},
+     "call_iterations": [5, 1, 9], "self_overlap_new": 0.00125, "skin_overlap_new": 0.0008, "folded_new": 2},
     {"ms": 3, "volume_ratio": 1.1, "self_intersections_new": 4, "tracker_calls": 30, "capped_calls": 1,
-     "call_iterations": [2, 7, 3, 100], "self_overlap_new": 0.0005}])");
+     "call_iterations": [2, 7, 3, 100], "self_overlap_new": 0.0005, "skin_overlap_new": 0.0001, "folded_new": 6}])");
   rows = rows_from_metrics(m, "r", "a", true);
   CHECK(rows[0]["self_intersections_new"] == 4);
   CHECK(rows[0]["self_overlap_new"] == 0.00125);  // the worst frame's, shown in percent
-  CHECK(markdown_table(rows).find("| 0.1250 | 4 (") != std::string::npos);
+  CHECK(rows[0]["skin_overlap_new"] == 0.0008);
+  CHECK(rows[0]["folded_new"] == 6);
+  CHECK(markdown_table(rows).find("| 0.1250 | 0.0800 | 4 (") != std::string::npos);
+  CHECK(markdown_table(rows).find(") | 6 | 3 |") != std::string::npos);  // folded new, then new inverted
   CHECK(rows[0]["capped_share"] == 0.05);
   // Iterations per call over both frames (1 2 3 5 7 9 100): median 5, nearest-rank p95 100.
   CHECK(rows[0]["iterations_median"] == 5);

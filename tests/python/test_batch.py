@@ -111,3 +111,13 @@ def test_a_worker_with_another_isokit_version_fails_the_job(tmp_path):
     row = batch.run_job(job, "0.0.0-other")
     assert row["status"] == "failed" and "runs isokit" in row["error"] and "0.0.0-other" in row["error"]
     assert batch.run_job(job, batch._isokit_version())["status"] == "done"
+
+
+def test_a_job_without_a_method_bakes_with_isokits_default(tmp_path):
+    from isokit import skinning
+    path = tmp_path / "m.json"
+    path.write_text(json.dumps({"format": "isokit-batch", "version": 1, "jobs": [
+        {"name": "x", "rig": "procedural:cylinder", "bends": ["Bone1:x:30"], "frames": 3,
+         "outputs": {"pc2": "x.pc2"}}]}))
+    jobs, _ = batch.load_manifest(str(path))
+    assert jobs[0]["method"] == skinning.DEFAULT_METHOD == "implicit2013"

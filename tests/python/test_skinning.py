@@ -59,6 +59,11 @@ def test_bakes_with_every_method_give_frames_and_metrics(cylinder_file):
         m = result.metrics()
         assert method in m["methods"] and len(m["methods"][method]["frames"]) == 9
         assert all(f["self_overlap_new"] >= 0 for f in m["methods"][method]["frames"])
+        # the skin-only metrics: the cylinder has no rigid piece, so its skin is the whole mesh
+        assert all(f["skin_overlap_new"] == f["self_overlap_new"] for f in m["methods"][method]["frames"])
+        assert all(f["folded_new"] >= 0 and f["folded_triangles"] >= f["folded_new"]
+                   for f in m["methods"][method]["frames"])
+        assert m["methods"][method]["frames"][0]["folded_new"] == 0
     # the bake reports each frame; an exception in the callback stops it
     seen = []
     skinner.bake("dqs", clip="bend", progress=lambda stage, done, total: seen.append((stage, done, total)))
@@ -177,3 +182,20 @@ def test_the_relaxation_mask_is_read_written_and_holds_vertices_rigid(cylinder_f
         rig.relax_mask = np.zeros(3)
     with pytest.raises(isokit.InputError, match=r"relax_mask\[0\]"):
         rig.relax_mask = np.full(len(rig.rest), 2.0)
+
+
+def test_folded_triangles_agree_with_the_metrics(cylinder_file):
+    rig = skinning.load(cylinder_file)
+    poses = bend_poses(rig, "Bone1", 160, 5)
+    skinner = skinning.Skinner(rig)
+    for method in ("lbs", "dqs"):
+        result = skinner.bake(method, poses=poses, self_intersections=False)
+        flags = skinning.folded_triangles(rig, result.frames, poses)
+        assert flags.shape == (5, len(rig.triangles)) and flags.dtype == np.bool_
+        frames = result.metrics()["methods"][method]["frames"]
+        assert [int(f.sum()) for f in flags] == [f["folded_new"] for f in frames]
+        assert not flags[0].any()
+    assert skinning.folded_triangles(rig, skinner.bake("lbs", poses=poses).frames, poses)[-1].any()
+    with pytest.raises(ValueError, match="one pose per frame"):
+        skinning.folded_triangles(rig, result.frames, poses[:2])
+    assert skinning.DEFAULT_METHOD == "implicit2013"

@@ -208,3 +208,72 @@ TEST_CASE("bad input to the overlap is a one-line error", "[unit][metrics][overl
   const Mesh empty;
   CHECK(self_overlap(empty.v, empty.f).overlap == 0);
 }
+
+namespace {
+
+/// The vertices of the meshes joined after the first `skin_vertices`: the rigid pieces.
+std::vector<int> vertices_from(Eigen::Index skin_vertices, Eigen::Index all) {
+  std::vector<int> v;
+  for (Eigen::Index i = skin_vertices; i < all; ++i) v.push_back(static_cast<int>(i));
+  return v;
+}
+
+/// `m` with the vertices [begin, end) moved by `d`.
+track::Positions moved(const Mesh& m, Eigen::Index begin, Eigen::Index end, const Eigen::Vector3f& d) {
+  track::Positions p = m.v;
+  for (Eigen::Index i = begin; i < end; ++i) p.row(i) += d.transpose();
+  return p;
+}
+
+}  // namespace
+
+TEST_CASE("skin overlap: two rigid pieces passing into each other add nothing to the skin's",
+          "[unit][metrics][overlap]") {
+  // The skin: one ball. Two rigid pieces beside it (a sword and a hand guard), apart at rest.
+  const Mesh skin = icosphere(4);
+  const Mesh pieces =
+      join(icosphere(3, 0.4, Eigen::Vector3d(3, 0, 0)), icosphere(3, 0.4, Eigen::Vector3d(4, 0, 0)));
+  const Mesh m = join(skin, pieces);
+  const Eigen::Index ns = skin.v.rows(), first_piece_end = ns + pieces.v.rows() / 2;
+  SkinReference ref;
+  ref.rigid_vertices = vertices_from(ns, m.v.rows());
+  const FrameMetricsEvaluator eval(m.v, m.f, {}, ref);
+  CHECK(eval.skin_triangles().rows() == skin.f.rows());
+  // The first piece moves half into the second.
+  const track::Positions posed = moved(m, ns, first_piece_end, {0.6f, 0, 0});
+  const FrameMetrics f = eval.evaluate(posed, false);
+  CHECK(f.self_overlap_new > 1e-3);
+  CHECK(f.skin_overlap == 0);
+  CHECK(f.skin_overlap_new == 0);
+  CHECK(f.folded_new == -1);  // no weights: no folds
+}
+
+TEST_CASE("skin overlap: a skin passing into itself next to a rigid piece gives its own volume",
+          "[unit][metrics][overlap]") {
+  const int level = 4;
+  // The skin: two balls 2.5 apart (an arm and a chest). A rigid piece, itself overlapping a
+  // second one at rest already, sits beside them.
+  const Mesh skin = join(icosphere(level), icosphere(level, 1, Eigen::Vector3d(2.5, 0, 0)));
+  const Mesh pieces =
+      join(icosphere(3, 0.4, Eigen::Vector3d(0, 3, 0)), icosphere(3, 0.4, Eigen::Vector3d(0.3, 3, 0)));
+  const Mesh m = join(skin, pieces);
+  const Eigen::Index ns = skin.v.rows(), half = skin.v.rows() / 2;
+  SkinReference ref;
+  ref.rigid_vertices = vertices_from(ns, m.v.rows());
+  const FrameMetricsEvaluator eval(m.v, m.f, {}, ref);
+  // The second ball moves 1.5 toward the first: their lens, 1.0 apart.
+  const track::Positions posed = moved(m, half, ns, {-1.5f, 0, 0});
+  const FrameMetrics f = eval.evaluate(posed, false);
+  const track::Positions skin_alone = posed.topRows(ns);
+  const SelfOverlap own = self_overlap(skin_alone, skin.f), own_rest = self_overlap(skin.v, skin.f);
+  CHECK(f.skin_overlap == own.overlap);
+  CHECK(f.skin_overlap_new == Approx((own.overlap - own_rest.overlap) / own_rest.enclosed));
+  const double shrink = polyhedron_volume(level) / (4.0 / 3.0 * kPi);
+  CHECK(std::abs(f.skin_overlap - lens_volume(1, 1.0) * shrink) <= 0.02 * lens_volume(1, 1.0));
+  // The whole mesh counts the pieces' overlap too; its new share is the skin's over a larger body.
+  CHECK(f.self_overlap > f.skin_overlap);
+  CHECK(f.self_overlap_new > 0);
+  // A rigid vertex index outside the mesh is a one-line error.
+  ref.rigid_vertices = {static_cast<int>(m.v.rows())};
+  CHECK_THROWS_AS(FrameMetricsEvaluator(m.v, m.f, {}, ref), InputError);
+}

@@ -141,8 +141,9 @@ TEST_CASE("viewer: the edited pose saved as a pose script loads back as that pos
   CHECK_THROWS_AS(m.save_pose_script("/nonexistent/dir/pose.json"), InputError);
 }
 
-TEST_CASE("viewer: overlays flag the frame's intersecting and inverted triangles, contacts and the mask",
-          "[viewer][unit]") {
+TEST_CASE(
+    "viewer: overlays flag the frame's intersecting, inverted and folded triangles, contacts and the mask",
+    "[viewer][unit]") {
   Rig rig = make_cylinder();
   rig.relax_mask.assign(static_cast<std::size_t>(rig.rest.rows()), 1.0f);
   rig.relax_mask[0] = 0.0f;
@@ -169,6 +170,10 @@ TEST_CASE("viewer: overlays flag the frame's intersecting and inverted triangles
   REQUIRE(!overlap.empty());
   for (std::size_t t = 0; t < dqs.overlap.size(); ++t)
     CHECK(dqs.overlap[t] == (std::binary_search(overlap.begin(), overlap.end(), int(t)) ? 1 : 0));
+  // DQS folds the inside of the 150° bend: the folds overlay flags what the metrics count.
+  const long folded = std::count(dqs.folded.begin(), dqs.folded.end(), 1);
+  CHECK(folded > 0);
+  CHECK(folded == sk->measure(m.edited_pose(), m.positions(), false).folded_new);
   m.set_method(Method::kTracking2014);
   const viewer::Overlays& trk = m.overlays();
   CHECK(trk.mask[0] == 0.0f);

@@ -44,13 +44,13 @@ def _module_error():
 class IsokitSettings(bpy.types.PropertyGroup):
     method: bpy.props.EnumProperty(
         name="Method",
-        items=[("tracking2014", "Tracking (2014)", "Iso-surface tracking, Vaillant et al. 2014"),
-               ("implicit2013", "Implicit (2013)", "Implicit skinning, Vaillant et al. 2013"),
+        items=[("implicit2013", "Implicit (2013)", "Implicit skinning, Vaillant et al. 2013 (isokit's default)"),
+               ("tracking2014", "Tracking (2014)", "Iso-surface tracking, Vaillant et al. 2014"),
                ("ddm", "Direct Delta Mush", "Direct Delta Mush, Le & Lewis 2019"),
                ("cor", "Centers of rotation", "Optimized centers of rotation, Le & Hodgins 2016"),
                ("dqs", "Dual quaternions", "Dual-quaternion skinning"),
                ("lbs", "Linear blend", "Linear blend skinning")],
-        default="tracking2014")
+        default=core.DEFAULT_METHOD)
     setup: bpy.props.StringProperty(name="Setup", subtype="FILE_PATH",
                                     description="An isokit setup JSON file (empty: isokit's defaults)")
     use_scene_range: bpy.props.BoolProperty(name="Scene range", default=True)

@@ -187,10 +187,16 @@ def read_poses(scene, armature, joints, parents, frames):
     return poses
 
 
-def bake(arrays, poses, method="tracking2014", setup=None, progress=None):
-    """isokit's bake of the arrays: frames (F, V, 3) in world space."""
+# isokit's default method (isokit.skinning.DEFAULT_METHOD, the score's first implicit method:
+# docs/decisions/default-method-follows-the-score.md); the add-on's menu starts on it.
+DEFAULT_METHOD = "implicit2013"
+
+
+def bake(arrays, poses, method=None, setup=None, progress=None):
+    """isokit's bake of the arrays: frames (F, V, 3) in world space; `method` None: isokit's default."""
     from isokit import skinning
 
+    method = method or skinning.DEFAULT_METHOD
     rig = skinning.Rig.from_arrays(arrays["vertices"], arrays["triangles"], arrays["joints"], arrays["parents"],
                                    arrays["bind_world"], arrays["weights"], name="blender")
     if arrays.get("mask") is not None:

@@ -144,6 +144,9 @@ void take(const ScriptEvent& e, GLFWwindow* w, StudioModel& model, const gui::La
 int run_gui(const GuiOptions& o) {
   std::vector<ScriptEvent> events;
   if (!o.script_path.empty()) events = load_script(o.script_path);
+  if (!o.script_path.empty())  // the screenshots' folder exists before anything runs
+    make_output_folder(o.screenshot_dir.empty() ? "." : o.screenshot_dir,
+                       "isokit-opdesigner gui --screenshot-dir");
   gui_kit::GlfwSession glfw("the design studio");  // first: without a display, fail before solving anything
   std::unique_ptr<StudioModel> model = open_model(o);
   GLFWwindow* window = gui_kit::open_window("the design studio", "isokit operator studio", o.width, o.height,

@@ -230,7 +230,7 @@ struct Args {
   std::string rig;
   bool info_fit{false};
   std::string info_setup;
-  std::string method{"tracking2014"}, setup, device{"cpu"};
+  std::string method{to_string(kDefaultMethod)}, setup, device{"cpu"};
   AnimationRequest animation;
   double fps{30}, max_step{0};
   bool compare{false}, no_self{false};
@@ -286,8 +286,7 @@ CLI::App* add_bake(CLI::App& app, Args& a) {
   bake->add_option("--pc2", a.outputs.pc2,
                    "write the baked positions as a PC2 point cache (the file's vertex order; Blender's "
                    "Mesh Cache modifier, 3ds Max)");
-  bake->add_flag("--compare", a.compare,
-                 "also run the other three methods (metrics and renders side by side)");
+  bake->add_flag("--compare", a.compare, "also run every other method (metrics and renders side by side)");
   bake->add_flag("--no-self-intersections", a.no_self,
                  "skip the exact self-intersection count (faster metrics)");
   return bake;
@@ -337,7 +336,8 @@ void make_demo(Args& a) {
   a.animation = AnimationRequest{};
   a.animation.bends = {"LeftForeArm:x:150", "LeftLeg:x:150"};
   a.animation.frames = a.demo_frames;
-  a.outputs = BakeOutputs{a.demo_out + "/tracking2014.glb", a.demo_out + "/metrics.json", a.demo_out, "", ""};
+  a.outputs = BakeOutputs{a.demo_out + "/" + to_string(kDefaultMethod) + ".glb", a.demo_out + "/metrics.json",
+                          a.demo_out, "", ""};
   a.max_step = a.demo_max_step;
 }
 
@@ -419,9 +419,10 @@ int run_bake(const Args& a, const std::vector<Method>& methods, Method main, con
     results.push_back(skinner.bake(m, animation.poses, bo));
     const BakeResult& r = results.back();
     std::fprintf(stderr,
-                 "  %-13s %.2f ms/frame, worst: %d self-intersections, %d inverted triangles (%d new)\n",
-                 to_string(m), r.mean_ms, r.worst.self_intersections, r.worst.inverted_triangles,
-                 r.worst.new_inverted_triangles);
+                 "  %-13s %.2f ms/frame, worst: %d self-intersections, %d folded triangles (%d new), "
+                 "%d inverted triangles (%d new)\n",
+                 to_string(m), r.mean_ms, r.worst.self_intersections, r.worst.folded_triangles,
+                 r.worst.folded_new, r.worst.inverted_triangles, r.worst.new_inverted_triangles);
   }
   const BakeResult& written = main_result(results, main);
   const ReportContext ctx{animation.description, a.fps, static_cast<int>(std::thread::hardware_concurrency()),
@@ -476,7 +477,7 @@ int main(int argc, char** argv) {
 #endif
     if (*demo) {
       make_demo(a);
-      return run_bake(a, all_methods(), Method::kTracking2014, progress);
+      return run_bake(a, all_methods(), kDefaultMethod, progress);
     }
     std::vector<Method> methods{method_from_string(a.method)};
     if (a.compare)

@@ -598,6 +598,12 @@ const Overlays& ViewerModel::overlays() {
   o.overlap.assign(nt, 0);
   for (const int t : skinning::new_overlap_triangles(r.rest, f.positions, r.triangles))
     o.overlap[std::size_t(t)] = 1;
+  // Folds: turned by more than 90° from the rest normal carried by the skinning blend.
+  o.folded.assign(nt, 0);
+  if (const skinning::FoldCounter* folds = skinner_->metrics_evaluator().folds()) {
+    const std::vector<std::uint8_t> flags = folds->folded(f.positions, skin);
+    for (std::size_t k = 0; k < nt; ++k) o.folded[k] = flags[k] && !folds->rest_folded()[k] ? 1 : 0;
+  }
   overlays_ = std::move(o);
   return *overlays_;
 }

@@ -5,8 +5,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <string>
 #include <utility>
 
+#include "isokit/core/error.h"
 #include "isokit/core/mesh_quality.h"
 #include "metrics/metrics_check.h"
 
@@ -88,6 +90,24 @@ track::Triangles closed_rows(const track::Triangles& triangles, const MeshClosur
   return out;
 }
 
+/// The rows of `triangles` with no corner in `excluded` (a per-vertex flag).
+track::Triangles rows_without(const track::Triangles& triangles, const std::vector<char>& excluded) {
+  std::vector<Eigen::Index> rows;
+  for (Eigen::Index f = 0; f < triangles.rows(); ++f)
+    if (!excluded[triangles(f, 0)] && !excluded[triangles(f, 1)] && !excluded[triangles(f, 2)])
+      rows.push_back(f);
+  track::Triangles out(static_cast<Eigen::Index>(rows.size()), 3);
+  for (std::size_t i = 0; i < rows.size(); ++i)
+    out.row(static_cast<Eigen::Index>(i)) = triangles.row(rows[i]);
+  return out;
+}
+
+/// max(0, overlap − rest overlap) / rest enclosed volume (NaN when nothing is enclosed at rest).
+double new_overlap_share(double overlap, const SelfOverlap& rest) {
+  if (!(rest.enclosed > 0)) return FrameMetrics::kNotComputed;
+  return std::max(0.0, overlap - rest.overlap) / rest.enclosed;
+}
+
 }  // namespace
 
 double enclosed_volume(const track::Positions& positions, const track::Triangles& triangles) {
@@ -139,6 +159,10 @@ FrameMetrics worst_of(const FrameMetrics& a, const FrameMetrics& b) {
   w.degenerate_faces = worse(a.degenerate_faces, b.degenerate_faces);
   w.self_overlap = worse(a.self_overlap, b.self_overlap);
   w.self_overlap_new = worse(a.self_overlap_new, b.self_overlap_new);
+  w.skin_overlap = worse(a.skin_overlap, b.skin_overlap);
+  w.skin_overlap_new = worse(a.skin_overlap_new, b.skin_overlap_new);
+  w.folded_triangles = worse(a.folded_triangles, b.folded_triangles);
+  w.folded_new = worse(a.folded_new, b.folded_new);
   w.inverted_triangles = worse(a.inverted_triangles, b.inverted_triangles);
   w.new_inverted_triangles = worse(a.new_inverted_triangles, b.new_inverted_triangles);
   w.contact_vertices = worse(a.contact_vertices, b.contact_vertices);
@@ -159,8 +183,10 @@ FrameMetrics worst_of(const FrameMetrics& a, const FrameMetrics& b) {
   return w;
 }
 
+FrameMetricsEvaluator::~FrameMetricsEvaluator() = default;
+
 FrameMetricsEvaluator::FrameMetricsEvaluator(track::Positions rest, track::Triangles triangles,
-                                             SelfIntersectionOptions options)
+                                             SelfIntersectionOptions options, SkinReference skin)
     : rest_(std::move(rest)), triangles_(std::move(triangles)), options_(options) {
   detail::check_triangles(triangles_, rest_.rows(), "FrameMetricsEvaluator");
   edges_ = unique_edges(triangles_);
@@ -170,6 +196,21 @@ FrameMetricsEvaluator::FrameMetricsEvaluator(track::Positions rest, track::Trian
   rest_volume_ = closed_triangles_.rows() > 0 ? enclosed_volume(rest_, closed_triangles_) : 0.0;
   rest_diagonal_ = bbox_diagonal(rest_);
   rest_overlap_ = self_overlap(rest_, triangles_);
+  skin_triangles_ = triangles_;
+  if (!skin.rigid_vertices.empty()) {
+    std::vector<char> rigid(static_cast<std::size_t>(rest_.rows()), 0);
+    for (int v : skin.rigid_vertices) {
+      require(v >= 0 && v < rest_.rows(), "FrameMetricsEvaluator: rigid vertex " + std::to_string(v),
+              "outside the mesh's " + std::to_string(rest_.rows()) + " vertices",
+              "pass vertex indices of this mesh (find_rigid_pieces)");
+      rigid[static_cast<std::size_t>(v)] = 1;
+    }
+    skin_triangles_ = rows_without(triangles_, rigid);
+    has_rigid_ = skin_triangles_.rows() < triangles_.rows();
+  }
+  rest_skin_overlap_ = has_rigid_ ? self_overlap(rest_, skin_triangles_) : rest_overlap_;
+  if (!skin.weights.empty())
+    folds_ = std::make_unique<FoldCounter>(rest_, triangles_, skin.weights, skin.rest_skin);
 }
 
 const std::vector<std::array<int, 2>>& FrameMetricsEvaluator::rest_pairs() const {
@@ -184,7 +225,7 @@ const std::vector<std::array<int, 2>>& FrameMetricsEvaluator::rest_pairs() const
 }
 
 FrameMetrics FrameMetricsEvaluator::evaluate(const track::Positions& posed, bool self_intersections,
-                                             bool overlap) const {
+                                             bool overlap, const std::vector<Affine>* skin) const {
   detail::check_same_vertex_count(rest_, posed, "FrameMetricsEvaluator::evaluate");
   FrameMetrics m;
   if (self_intersections) {
@@ -201,8 +242,14 @@ FrameMetrics FrameMetricsEvaluator::evaluate(const track::Positions& posed, bool
   }
   if (overlap) {
     m.self_overlap = self_overlap(posed, triangles_).overlap;
-    if (rest_overlap_.enclosed > 0)
-      m.self_overlap_new = std::max(0.0, m.self_overlap - rest_overlap_.overlap) / rest_overlap_.enclosed;
+    m.self_overlap_new = new_overlap_share(m.self_overlap, rest_overlap_);
+    m.skin_overlap = has_rigid_ ? self_overlap(posed, skin_triangles_).overlap : m.self_overlap;
+    m.skin_overlap_new = new_overlap_share(m.skin_overlap, rest_skin_overlap_);
+  }
+  if (folds_ && skin) {
+    const FoldCounter::Count c = folds_->count(folds_->folded(posed, *skin));
+    m.folded_triangles = c.folded;
+    m.folded_new = c.folded_new;
   }
   if (closed_triangles_.rows() > 0) {
     m.volume = enclosed_volume(posed, closed_triangles_);

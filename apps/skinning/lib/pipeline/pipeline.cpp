@@ -83,6 +83,17 @@ std::vector<std::uint8_t> inverted_flags(const track::FieldFunction& f, const tr
 
 }  // namespace
 
+SkinReference metrics_reference(const Rig& rig) {
+  SkinReference ref;
+  ref.weights = rig.weights;
+  ref.rest_skin = skinning_matrices(rig, rest_pose(rig));
+  // Every rigid piece, whatever SkinSetup::rigid_pieces says: the metrics depend on the rig
+  // alone, so that every method (and every setup) is measured on the same skin.
+  for (const RigidPiece& p : find_rigid_pieces(rig))
+    ref.rigid_vertices.insert(ref.rigid_vertices.end(), p.vertices.begin(), p.vertices.end());
+  return ref;
+}
+
 Rig open_rig(const std::string& spec, double fps, const Progress& progress,
              std::vector<std::string>* warnings, const MaskSource& mask) {
   const std::string prefix = "procedural:";
@@ -112,7 +123,8 @@ Skinner::Skinner(Rig rig, SkinSetup setup, Progress progress)
   require(!rig_.weights.empty(), rig_.name + ": weights", "the rig has no skin weights",
           "give weights (heat weights are computed by isokit-skin when a file has none)");
   fitted_ = std::make_unique<FittedRig>(rig_, setup_, progress_);
-  evaluator_ = std::make_unique<FrameMetricsEvaluator>(rig_.rest, rig_.triangles);
+  evaluator_ = std::make_unique<FrameMetricsEvaluator>(rig_.rest, rig_.triangles, SelfIntersectionOptions{},
+                                                       metrics_reference(rig_));
 }
 
 Skinner::~Skinner() = default;
@@ -149,9 +161,9 @@ FrameMetrics Skinner::measure(const Pose& pose, const track::Positions& position
     iso2014_ = track::sample_iso_values(rest, rig_.rest);
     rest_inverted_ = inverted_flags(rest, rig_.rest, rig_.triangles);
   }
-  FrameMetrics m = evaluator_->evaluate(positions, self_intersections);
-  const track::FieldFunction f =
-      metrics_field.function(metrics_field.pose_of(skinning_matrices(rig_, pose)), true);
+  const std::vector<Affine> skin = skinning_matrices(rig_, pose);
+  FrameMetrics m = evaluator_->evaluate(positions, self_intersections, true, &skin);
+  const track::FieldFunction f = metrics_field.function(metrics_field.pose_of(skin), true);
   const std::vector<std::uint8_t> inv = inverted_flags(f, positions, rig_.triangles);
   m.inverted_triangles = 0;
   m.new_inverted_triangles = 0;

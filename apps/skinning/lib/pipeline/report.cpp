@@ -29,6 +29,10 @@ json metrics_to_json(const FrameMetrics& m) {
               {"self_intersections_new", count(m.self_intersections_new)},
               {"self_overlap", num(m.self_overlap)},
               {"self_overlap_new", num(m.self_overlap_new)},
+              {"skin_overlap", num(m.skin_overlap)},
+              {"skin_overlap_new", num(m.skin_overlap_new)},
+              {"folded_triangles", count(m.folded_triangles)},
+              {"folded_new", count(m.folded_new)},
               {"degenerate_faces", count(m.degenerate_faces)},
               {"inverted_triangles", count(m.inverted_triangles)},
               {"new_inverted_triangles", count(m.new_inverted_triangles)},
@@ -177,20 +181,25 @@ std::string comparison_table(const std::vector<BakeResult>& results) {
     return std::string(b);
   };
   std::ostringstream o;
-  o << "| method | new overlap (% of volume) | self-intersections | inverted triangles (new) "
-       "| iso residual max | edge distortion mean / max | volume ratio | rest recovery | calls at cap "
-       "| ms/frame | × dqs |\n";
-  o << "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+  auto counts = [](int all, int fresh) {
+    return (all >= 0 ? std::to_string(all) : "-") + " (" + (fresh >= 0 ? std::to_string(fresh) : "-") + ")";
+  };
+  o << "| method | new overlap (% of volume) | skin overlap (%) | self-intersections | folded (new) "
+       "| inverted triangles (new) | iso residual max | edge distortion mean / max | volume ratio | rest "
+       "recovery "
+       "| calls at cap | ms/frame | × dqs |\n";
+  o << "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
   for (const BakeResult& r : results) {
     const FrameMetrics& w = r.worst;
     o << "| " << to_string(r.method) << " | " << fmt("%.4f", 100 * w.self_overlap_new) << " | "
+      << fmt("%.4f", 100 * w.skin_overlap_new) << " | "
       << (w.self_intersections >= 0 ? std::to_string(w.self_intersections) : "-") << " | "
-      << (w.inverted_triangles >= 0 ? std::to_string(w.inverted_triangles) : "-") << " ("
-      << (w.new_inverted_triangles >= 0 ? std::to_string(w.new_inverted_triangles) : "-") << ") | "
-      << fmt("%.1e", w.iso_residual_max) << " | " << fmt("%.3f", w.edge_distortion_mean) << " / "
-      << fmt("%.3f", w.edge_distortion_max) << " | " << fmt("%.4f", w.volume_ratio) << " | "
-      << (r.rest_recovery >= 0 ? fmt("%.1e", r.rest_recovery) : "-") << " | " << calls_at_cap(r) << " | "
-      << fmt("%.2f", r.mean_ms) << " | " << fmt("%.1f", r.mean_ms / dqs) << " |\n";
+      << counts(w.folded_triangles, w.folded_new) << " | "
+      << counts(w.inverted_triangles, w.new_inverted_triangles) << " | " << fmt("%.1e", w.iso_residual_max)
+      << " | " << fmt("%.3f", w.edge_distortion_mean) << " / " << fmt("%.3f", w.edge_distortion_max) << " | "
+      << fmt("%.4f", w.volume_ratio) << " | " << (r.rest_recovery >= 0 ? fmt("%.1e", r.rest_recovery) : "-")
+      << " | " << calls_at_cap(r) << " | " << fmt("%.2f", r.mean_ms) << " | " << fmt("%.1f", r.mean_ms / dqs)
+      << " |\n";
   }
   return o.str();
 }

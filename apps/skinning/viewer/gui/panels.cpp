@@ -16,6 +16,8 @@ const char* to_string(Overlay o) {
       return "none";
     case Overlay::kOverlap:
       return "interpenetration";
+    case Overlay::kFolds:
+      return "folds";
     case Overlay::kIntersecting:
       return "self-intersections";
     case Overlay::kInverted:
@@ -104,9 +106,10 @@ void Panels::draw_method_panel() {
   if (ImGui::Combo("beside", &c, cnames.data(), int(cnames.size())))
     model_.set_compare(c == 0 ? std::nullopt : std::optional<Method>(methods[std::size_t(c - 1)]));
   int o = int(overlay_);
-  const char* overlays[] = {"none",     "interpenetration", "self-intersections", "inverted triangles",
-                            "contacts", "relaxation mask",  "distance to DQS"};
-  if (ImGui::Combo("overlay", &o, overlays, 7)) set_overlay(Overlay(o));
+  const char* overlays[] = {
+      "none",     "interpenetration", "folds",          "self-intersections", "inverted triangles",
+      "contacts", "relaxation mask",  "distance to DQS"};
+  if (ImGui::Combo("overlay", &o, overlays, 8)) set_overlay(Overlay(o));
   if (ImGui::Button("reset view")) view_ = ViewState{}, dirty_ = true;
   ImGui::TextDisabled("view: right-drag turns, middle-drag pans, wheel zooms");
 }
@@ -199,6 +202,8 @@ void Panels::draw_stats_panel() {
     ImGui::TextDisabled("(metrics: measured when the pose rests)");
   } else {
     ImGui::Text("new interpenetration %.4f %% of the volume", 100 * m.self_overlap_new);
+    ImGui::Text("  of the skin alone %.4f %%", 100 * m.skin_overlap_new);
+    ImGui::Text("folded triangles %d (new %d)", m.folded_triangles, m.folded_new);
     ImGui::Text("self-intersections %d (new %d)", m.self_intersections, m.self_intersections_new);
     ImGui::Text("inverted triangles %d (new %d)", m.inverted_triangles, m.new_inverted_triangles);
     ImGui::Text("edge distortion max %.3f, mean %.4f", m.edge_distortion_max, m.edge_distortion_mean);

@@ -10,7 +10,7 @@ namespace isokit::viewer::gui {
 
 namespace {
 
-/// Per-face (interpenetration, intersecting, inverted) or per-vertex (contacts, mask, distance to DQS)
+/// Per-face (interpenetration, folds, intersecting, inverted) or per-vertex (contacts, mask, distance to DQS)
 /// colours of `overlay`; the other set stays empty.
 void overlay_colours(Overlay overlay, const Overlays& o, std::size_t nv, std::size_t nt,
                      skinning::RenderOptions& options) {
@@ -32,6 +32,9 @@ void overlay_colours(Overlay overlay, const Overlays& o, std::size_t nv, std::si
       break;
     case Overlay::kOverlap:
       faces(o.overlap);
+      break;
+    case Overlay::kFolds:
+      faces(o.folded);
       break;
     case Overlay::kIntersecting:
       faces(o.intersecting);

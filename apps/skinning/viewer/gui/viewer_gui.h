@@ -23,7 +23,7 @@ constexpr std::uint8_t kJointRgb[3] = {40, 90, 255};
 constexpr std::uint8_t kSelectedRgb[3] = {255, 150, 0};
 constexpr float kOverlayRgb[3] = {0.95f, 0.1f, 0.1f};  // flagged faces / vertices, linear RGB
 
-enum class Overlay { kNone, kOverlap, kIntersecting, kInverted, kContacts, kMask, kDqsDistance };
+enum class Overlay { kNone, kOverlap, kFolds, kIntersecting, kInverted, kContacts, kMask, kDqsDistance };
 const char* to_string(Overlay o);
 
 /// Orbit camera over the rig's rest box: yaw and pitch (radians), zoom (> 0, 1 = the box fills

@@ -20,6 +20,7 @@
 #include <atomic>
 #include <chrono>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <mutex>
 #include <nlohmann/json.hpp>
@@ -208,8 +209,8 @@ const json* Player::finish_frame(const ViewerModel& model) {
 }
 
 /// The state the gui test checks, with pixel counts of the shot.
-json shot_state(const json& e, const skinning::Image& img, const ViewerModel& model,
-                const gui::Panels& panels, const std::string& file) {
+json shot_state(const json& e, const skinning::Image& img, ViewerModel& model, const gui::Panels& panels,
+                const std::string& file) {
   const gui::Layout& l = panels.layout();
   const ImVec4 view(l.view_min.x, l.view_min.y, l.view_max.x, l.view_max.y);
   const std::uint8_t red[3] = {std::uint8_t(255 * 0.97f), 30, 30};
@@ -231,6 +232,8 @@ json shot_state(const json& e, const skinning::Image& img, const ViewerModel& mo
           {"selected_pixels", count_colour(img, view, gui::kSelectedRgb, 20)},
           {"joint_pixels", count_colour(img, view, gui::kJointRgb, 20)},
           {"overlay_pixels", count_colour(img, view, red, 60)},
+          // Triangles the folds overlay flags (folds hide inside creases: pixels cannot show them).
+          {"folded_triangles", std::count(model.overlays().folded.begin(), model.overlays().folded.end(), 1)},
           {"view", {view.x, view.y, view.z, view.w}}};
 }
 
@@ -344,6 +347,13 @@ int run_viewer(const ViewerGuiOptions& o) {
           "must be 320 to 8192 pixels wide (got " + std::to_string(o.width) + ")", "give e.g. --size 1280");
   std::unique_ptr<Player> player;  // a bad script fails before anything is fitted
   if (!o.script_path.empty()) player = std::make_unique<Player>(o.script_path);
+  if (player) {  // the script's outputs: their folders exist before anything runs
+    make_output_folder(o.screenshot_dir.empty() ? "." : o.screenshot_dir,
+                       "isokit-skin view --screenshot-dir");
+    const std::string parent = std::filesystem::path(o.report_path).parent_path().string();
+    if (!o.report_path.empty() && !parent.empty())
+      make_output_folder(parent, "isokit-skin view --report's folder");
+  }
   gui_kit::GlfwSession glfw("isokit-skin view");  // without a display, fail before fitting anything
   std::unique_ptr<ViewerModel> model = initial_model(o);
   GLFWwindow* window = gui_kit::open_window("isokit-skin view", "isokit skinning viewer", o.width, o.height,

@@ -36,4 +36,9 @@ void write_bytes_atomically(const std::string& path, const void* data, std::size
 /// \throw isokit::InputError as `write_stream_atomically`.
 void write_text_file_atomically(const std::string& path, const std::string& contents);
 
+/// Creates the folder `dir` and its parents when missing (an output folder named on a command
+/// line), so that a long run does not fail at its first write. `what` names the option in the
+/// error. \throw isokit::InputError naming `what` and `dir` if it cannot be created or is a file.
+void make_output_folder(const std::string& dir, const std::string& what);
+
 }  // namespace isokit

@@ -13,11 +13,13 @@
 #include <array>
 #include <cstddef>
 #include <limits>
+#include <memory>
 #include <mutex>
 #include <vector>
 
 #include <Eigen/Geometry>
 
+#include "isokit/skinning/folds.h"
 #include "isokit/skinning/mesh_closure.h"
 #include "isokit/skinning/self_overlap.h"
 #include "isokit/track/mesh.h"
@@ -98,7 +100,18 @@ struct FrameMetrics {
   /// share of the body that interpenetrates and did not at rest. The contact criterion
   /// (docs/skinning-metrics.md).
   double self_overlap_new{kNotComputed};
-  double volume{kNotComputed};                ///< `enclosed_volume` of the closed components, mesh units³
+  /// The same volume for the deforming skin alone: the triangles of the rig's rigid pieces
+  /// (rigid_pieces.h; they move with their bones in every method, and their overlap is the rig's
+  /// own) are left out. Equal to `self_overlap` on a rig without rigid pieces. Mesh units³.
+  double skin_overlap{kNotComputed};
+  /// max(0, `skin_overlap` − the rest frame's) / the rest skin's enclosed volume (|w| >= 1): as
+  /// `self_overlap_new`, for the skin alone. The contact criterion where it is present.
+  double skin_overlap_new{kNotComputed};
+  /// Triangles whose normal has turned by more than 90° from their rest normal carried by the
+  /// skinning blend's rotation (folds.h): the skin folded onto itself. No field involved.
+  int folded_triangles{-1};
+  int folded_new{-1};           ///< `folded_triangles` that were not folded at rest. The fold criterion.
+  double volume{kNotComputed};  ///< `enclosed_volume` of the closed components, mesh units³
   double volume_ratio{kNotComputed};          ///< volume / rest volume (NaN when no component is closed)
   double edge_distortion_mean{kNotComputed};  ///< `EdgeDistortion::mean` from rest, no unit
   double edge_distortion_max{kNotComputed};   ///< `EdgeDistortion::max` from rest, no unit
@@ -121,21 +134,39 @@ struct FrameMetrics {
 /// a field not computed in one frame takes the other's value).
 FrameMetrics worst_of(const FrameMetrics& a, const FrameMetrics& b);
 
+/// What the skin-only metrics need of the rig besides its mesh (all optional).
+struct SkinReference {
+  /// Skin weights (one entry per vertex) and the skinning matrices at the rest pose: with both,
+  /// `evaluate` counts folds (folds.h) when given the pose's skinning matrices.
+  SkinWeights weights;
+  std::vector<Affine> rest_skin;
+  /// Vertices of the rig's rigid pieces (find_rigid_pieces): every triangle with a corner among
+  /// them is left out of `skin_overlap`. Empty: the skin is the whole mesh.
+  std::vector<int> rigid_vertices;
+};
+
 /// Computes the geometric fields of `FrameMetrics` for many poses of one mesh: the constructor
 /// stores the rest positions, the unique edges and their rest lengths, the closed components and
 /// their rest volume; the rest mesh's intersecting pairs are found on the first `evaluate` that
 /// counts self-intersections.
 class FrameMetricsEvaluator {
  public:
-  /// \throw InputError for an index out of range.
+  /// \throw InputError for an index out of range, or weights that do not fit the mesh.
   FrameMetricsEvaluator(track::Positions rest, track::Triangles triangles,
-                        SelfIntersectionOptions options = {});
+                        SelfIntersectionOptions options = {}, SkinReference skin = {});
+  ~FrameMetricsEvaluator();
 
   /// Without `self_intersections` the exact pass (the slowest) is skipped: both counts stay -1;
-  /// without `self_overlap` the overlap volume is skipped (both stay NaN).
+  /// without `self_overlap` the overlap volumes are skipped (they stay NaN). With `skin` (the
+  /// pose's skinning matrices) and weights in the `SkinReference`, folds are counted (else -1).
   /// \throw InputError if `posed` has a different vertex count from the rest mesh.
   FrameMetrics evaluate(const track::Positions& posed, bool self_intersections = true,
-                        bool self_overlap = true) const;
+                        bool self_overlap = true, const std::vector<Affine>* skin = nullptr) const;
+
+  /// The fold counter (null without weights in the `SkinReference`).
+  const FoldCounter* folds() const { return folds_.get(); }
+  /// The triangles of the deforming skin (all but the rigid pieces').
+  const track::Triangles& skin_triangles() const { return skin_triangles_; }
 
   /// The rest mesh's volume enclosed twice and once (`self_overlap` at rest).
   const SelfOverlap& rest_overlap() const { return rest_overlap_; }
@@ -160,6 +191,10 @@ class FrameMetricsEvaluator {
   double rest_volume_{0};
   double rest_diagonal_{0};
   SelfOverlap rest_overlap_;
+  track::Triangles skin_triangles_;  ///< without the rigid pieces' triangles
+  bool has_rigid_{false};            ///< some triangle was left out of `skin_triangles_`
+  SelfOverlap rest_skin_overlap_;    ///< `self_overlap` of the skin alone at rest
+  std::unique_ptr<FoldCounter> folds_;
 };
 
 }  // namespace isokit::skinning

@@ -41,6 +41,14 @@ Rig open_rig(const std::string& spec, double fps = 30, const Progress& progress 
 enum class Method { kLbs, kDqs, kImplicit2013, kTracking2014, kDdm, kCor };
 
 const char* to_string(Method m);
+
+/// The method used where none is named: `isokit-skin bake` and `view`, `Skinner.bake` in Python,
+/// the Blender add-on and isokit-batch. It is the implicit method with the highest total of the
+/// real-rig evaluation against the best geometric method (`make eval`, then
+/// bench/eval/score_vs_geometric.py, which warns when the score puts another method first):
+/// docs/decisions/default-method-follows-the-score.md.
+constexpr Method kDefaultMethod = Method::kImplicit2013;
+
 /// \throw InputError listing the methods for an unknown name.
 Method method_from_string(const std::string& s);
 std::vector<Method> all_methods();
@@ -137,6 +145,11 @@ class FrameBaker {
   std::unique_ptr<State> s_;
 };
 
+/// What the skin-only metrics need of `rig` (metrics.h): its weights, the rest pose's skinning
+/// matrices, and the vertices of every rigid piece (find_rigid_pieces, whatever the setup), so
+/// that the metrics depend on the rig alone and every method is measured on the same skin.
+SkinReference metrics_reference(const Rig& rig);
+
 class Skinner {
  public:
   /// Validates the rig, computes heat weights when it has none, partitions and fits (progress
@@ -164,6 +177,8 @@ class Skinner {
   /// own contact flags).
   FrameMetrics measure(const Pose& pose, const track::Positions& positions, bool self_intersections,
                        const std::vector<std::uint8_t>* contact = nullptr);
+  /// The geometric metrics' evaluator (its fold counter and skin triangles feed the overlays).
+  const FrameMetricsEvaluator& metrics_evaluator() const { return *evaluator_; }
 
  private:
   Rig rig_;

@@ -15,11 +15,12 @@
 namespace isokit::viewer {
 
 struct ViewerGuiOptions {
-  std::string rig;                     ///< a rig file or `procedural:NAME`
-  std::string clip;                    ///< a clip to play at start ("" = edit the rest pose)
-  std::string setup;                   ///< a setup file ("" = the defaults)
-  std::string method{"tracking2014"};  ///< lbs | dqs | ddm | cor | implicit2013 | tracking2014
-  int width{1280}, height{800};        ///< window size in pixels
+  std::string rig;    ///< a rig file or `procedural:NAME`
+  std::string clip;   ///< a clip to play at start ("" = edit the rest pose)
+  std::string setup;  ///< a setup file ("" = the defaults)
+  /// lbs | dqs | ddm | cor | implicit2013 | tracking2014 (default: skinning::kDefaultMethod)
+  std::string method{skinning::to_string(skinning::kDefaultMethod)};
+  int width{1280}, height{800};  ///< window size in pixels
   /// ViewerOptions::edit_slice_ms: an edit's skin shown after this many ms of its solve (0 = whole).
   double edit_slice_ms{ViewerOptions{}.edit_slice_ms};
   /// Each drawn frame waits up to this long for the skin of the last edit when it is not shown

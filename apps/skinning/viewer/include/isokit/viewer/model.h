@@ -71,12 +71,15 @@ struct Overlays {
   /// Per triangle: bounds a region the skin encloses twice that it did not at rest
   /// (interpenetration, skinning::new_overlap_triangles).
   std::vector<std::uint8_t> overlap;
+  /// Per triangle: folded (turned by more than 90° from its rest normal carried by the skinning
+  /// blend, skinning/folds.h) and not folded at rest: what `FrameMetrics::folded_new` counts.
+  std::vector<std::uint8_t> folded;
 };
 
 class ViewerModel {
  public:
   /// A viewer of `skinner`'s rig, at the rest pose, editing, with `method`.
-  explicit ViewerModel(std::shared_ptr<skinning::Skinner> skinner, Method method = Method::kTracking2014,
+  explicit ViewerModel(std::shared_ptr<skinning::Skinner> skinner, Method method = skinning::kDefaultMethod,
                        ViewerOptions options = {});
   ~ViewerModel();
   ViewerModel(const ViewerModel&) = delete;
