@@ -26,7 +26,7 @@ build: configure
 	cmake --build $(BUILD) -j $(JOBS)
 
 # The skinning demo: the procedural humanoid's elbow and knee bent to 150° and back with all
-# six methods (lbs, dqs, ddm, cor, implicit2013, tracking2014); writes $(DEMO_OUT)/ (contact sheet, metrics JSON, tracking2014 .glb).
+# six methods (lbs, dqs, ddm, cor, implicit2013, tracking2014); writes $(DEMO_OUT)/ (contact sheet, metrics JSON, the default method's .glb: implicit2013.glb).
 demo: build
 	$(BUILD)/apps/skinning/isokit-skin demo --out $(DEMO_OUT)
 
