@@ -8,32 +8,15 @@
 #include <cmath>
 #include <limits>
 
-#include <Eigen/SparseCholesky>
-#include <Eigen/SparseCore>
-#ifdef ISOKIT_HAVE_CHOLMOD
-#include <Eigen/CholmodSupport>
-#endif
-
 #include "field_eval.h"
 #include "mesh_geometry.h"
 #include "newton_step.h"
 #include "points.h"
+#include "sparse_factor.h"
 
 namespace isokit::track::detail {
 
 namespace {
-
-using SpMat = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
-#ifdef ISOKIT_HAVE_CHOLMOD
-// CHOLMOD's simplicial LLᵀ: measured faster than its supernodal mode (Debian's reference BLAS)
-// and than Eigen's SimplicialLLT on these systems (docs/performance.md, "The global solve").
-class Factor : public Eigen::CholmodDecomposition<SpMat, Eigen::Lower> {
- public:
-  Factor() { setMode(Eigen::CholmodSimplicialLLt); }
-};
-#else
-using Factor = Eigen::SimplicialLLT<SpMat, Eigen::Lower, Eigen::AMDOrdering<int>>;
-#endif
 
 // Preconditioned CG on the current matrix with the last numeric factor: stop when the
 // preconditioned residual norm fell by this factor (relative; the tangential tolerance is then

@@ -7,10 +7,12 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include "active_set.h"
 #include "isokit/core/math.h"
+#include "isokit/track/energy_tracker.h"
 #include "isokit/track/field.h"
 #include "isokit/track/mesh.h"
 #include "isokit/track/tracker_options.h"
@@ -71,6 +73,7 @@ struct TrackerModel {
   std::vector<std::uint8_t> free;             // per vertex: free vertex (set_rest_field; all 0 before)
   TangentSolverCache global;                  // kGlobal: factor and bases between calls
   std::function<TrackInterrupt()> interrupt;  // set_interrupt: tested before each iteration
+  std::optional<EnergyTracker> energy;        // Relaxation::kEnergy: the whole call, caller's order
   // Outputs of the last call.
   VertexFlags flags;                        // caller's order
   std::vector<std::uint8_t> last_inverted;  // per triangle, at the end of the last call

@@ -32,6 +32,20 @@ void reorder(detail::TrackerModel& m) {
     for (int c = 0; c < 3; ++c) m.triangles(f, c) = m.rank[std::size_t(m.triangles(f, c))];
 }
 
+/// Relaxation::kEnergy: the local–global solve's options, with the fields TrackerOptions shares.
+EnergyTrackerOptions energy_options(const TrackerOptions& o) {
+  EnergyTrackerOptions e = o.energy;
+  e.max_iterations = o.max_iterations;
+  e.tolerance = o.tolerance;
+  e.iso_tolerance = o.iso_tolerance;
+  e.angle_contacts = o.angle_contacts;
+  e.contact_angle_deg = o.contact_angle_deg;
+  e.max_cotangent = o.max_cotangent;
+  e.min_gradient = o.min_gradient;
+  e.grain = o.grain;
+  return e;
+}
+
 }  // namespace
 
 IsoSurfaceTracker::IsoSurfaceTracker(const Positions& rest, const Triangles& triangles,
@@ -45,6 +59,8 @@ IsoSurfaceTracker::IsoSurfaceTracker(const Positions& rest, const Triangles& tri
   detail::validate_mesh(rest, m.triangles, m.iso.size());
   m.rest = detail::to_points(rest, "rest positions");
   detail::validate_iso_values(m.iso);
+  if (m.options.relaxation == Relaxation::kEnergy)
+    m.energy.emplace(rest, triangles, m.iso, energy_options(m.options));
   if (m.options.reorder_vertices) reorder(m);
   const std::vector<Vec3f>& pts = m.rest;
   m.adj = vertex_adjacency(m.triangles, static_cast<int>(pts.size()));
@@ -99,6 +115,7 @@ void IsoSurfaceTracker::set_anchor_stiffness(std::vector<float> stiffness) {
             "is outside [0, 1] (" + format_number(stiffness[i]) + ")", "use 0 (free) .. 1 (pinned)");
     any = any || stiffness[i] > 0.f;
   }
+  if (m.energy) m.energy->set_anchor_stiffness(stiffness);
   if (!any) stiffness.clear();
   if (!m.order.empty() && !stiffness.empty()) stiffness = detail::permuted(stiffness, m.order);
   // Pinned vertices have no unknowns in the global solve: its factor follows the pinned set.
@@ -114,9 +131,11 @@ void IsoSurfaceTracker::set_max_iterations(int iterations) {
   require(iterations >= 0, "tracker iterations", "must be >= 0 (got " + std::to_string(iterations) + ")",
           "use e.g. 100");
   model_->options.max_iterations = iterations;
+  if (model_->energy) model_->energy->set_max_iterations(iterations);
 }
 
 void IsoSurfaceTracker::set_interrupt(std::function<TrackInterrupt()> interrupt) {
+  if (model_->energy) model_->energy->set_interrupt(interrupt);
   model_->interrupt = std::move(interrupt);
 }
 
@@ -175,6 +194,10 @@ void IsoSurfaceTracker::mark_rest_inversions(const FieldFunction& rest_field) {
 }
 
 void IsoSurfaceTracker::set_rest_field(const FieldFunction& rest_field) {
+  if (model_->energy) {  // no free vertices and no fold test: one energy holds every vertex
+    require(static_cast<bool>(rest_field), "rest field", "is empty", "pass the field at the rest pose");
+    return;
+  }
   mark_rest_inversions(rest_field);
   detail::TrackerModel& m = *model_;
   m.free = detail::free_vertices(rest_field, m.rest, m.triangles, m.options);
@@ -208,6 +231,19 @@ void finish(detail::TrackState& s, detail::TrackerModel& m, Positions& positions
   write_positions(s, m, positions);
 }
 
+/// Relaxation::kEnergy: the whole call is the local–global solve (EnergyTracker); its flags become
+/// the tracker's (no β, no free vertex).
+TrackStats track_energy(detail::TrackerModel& m, const FieldFunction& field, Positions& positions,
+                        const Positions& anchors) {
+  const TrackStats st =
+      &anchors == &positions ? m.energy->track(field, positions) : m.energy->track(field, positions, anchors);
+  if (st.abandoned) return st;
+  m.flags = m.energy->flags();
+  m.flags.beta.assign(m.flags.contact.size(), 0.f);
+  m.flags.free.assign(m.flags.contact.size(), 0);
+  return st;
+}
+
 }  // namespace
 
 TrackStats IsoSurfaceTracker::track(const FieldFunction& field, const std::vector<Mat3f>& rotations,
@@ -221,6 +257,7 @@ TrackStats IsoSurfaceTracker::track(const FieldFunction& field, const std::vecto
   detail::TrackerModel& m = *model_;
   detail::validate_call(positions, m.iso.size(), field);
   detail::validate_rotations(rotations, m.iso.size());
+  if (m.energy) return track_energy(m, field, positions, anchors);
   std::vector<Vec3f> initial = detail::to_points(positions, "initial positions");
   if (!m.order.empty()) initial = detail::permuted(initial, m.order);
   std::vector<Vec3f> anchor;

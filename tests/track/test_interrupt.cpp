@@ -19,7 +19,8 @@ using namespace isokit::track;
 
 namespace {
 
-const Relaxation kSolvers[] = {Relaxation::kJacobi, Relaxation::kConjugateGradient, Relaxation::kGlobal};
+const Relaxation kSolvers[] = {Relaxation::kJacobi, Relaxation::kConjugateGradient, Relaxation::kGlobal,
+                               Relaxation::kEnergy};
 
 using Scene = test::SphereScene;
 

@@ -209,6 +209,9 @@ struct BakeState {
   track::Positions current;             ///< tracking2014: the last result
   Pose previous;                        ///< tracking2014: the last frame's pose
   std::vector<Affine> prev_skin;        ///< tracking2014: the last sub-step's matrices
+  /// tracking2014 with TrackerOptions::relaxation kEnergy: the last sub-step's DQS positions
+  /// (each sub-step starts from the last result moved by DQS's change)
+  track::Positions prev_dqs;
   /// The relaxation mask per vertex (`vertex_mask`; empty: all 1) and its vertices below 1.
   std::vector<float> mask;
   std::vector<int> masked;
@@ -353,6 +356,15 @@ void move_by_rigid_deltas(const std::vector<int>& partition, const std::vector<A
   });
 }
 
+/// The energy solve's start (docs/tracking.md, "The energy solve"): the last result moved by
+/// DQS's change since the last sub-step, so that the carry is smooth across joints (a rigid delta
+/// per part tears the skin where two parts meet) and exact where DQS is: at rest it brings a
+/// rest result back to rest.
+void carry_by_dqs(BakeState& s, const track::Positions& dqs) {
+  s.current += dqs - s.prev_dqs;
+  s.prev_dqs = dqs;
+}
+
 /// One frame of tracking2014: the 2014 sub-step rule (§5.2), then per sub-step stage 1, the DQS
 /// rotations as the ARAP targets, the axis guard and the tracker (stage 2).
 void track_frame(const Skinner& sk, BakeState& s, const Pose& pose, std::size_t grain, FrameStats& st) {
@@ -364,8 +376,12 @@ void track_frame(const Skinner& sk, BakeState& s, const Pose& pose, std::size_t 
   for (int k = 1; k <= n; ++k) {
     const Pose ps = k == n ? pose : interpolate(s.previous, pose, double(k) / n);
     const std::vector<Affine> skin = skinning_matrices(rig, ps);
-    move_by_rigid_deltas(sk.fitted().partition(), s.prev_skin, skin, grain, s.current);
     dual_quaternion_blend(rig.weights, skin, rig.rest, scratch, &rotations, grain);
+    if (sk.setup().tracker.relaxation == track::Relaxation::kEnergy) {
+      carry_by_dqs(s, scratch);
+    } else {
+      move_by_rigid_deltas(sk.fitted().partition(), s.prev_skin, skin, grain, s.current);
+    }
     if (s.guard) st.axis_guard_moves += s.guard->apply(skin, s.current);
     s.field->set_pose(skin);
     track::TrackStats ts;
@@ -472,7 +488,9 @@ void start_bake(Skinner& sk, Method method, const BakeOptions& options, BakeStat
     s.field = &sk.field(setup.tree == TreeKind::k2013 ? TreeKind::k2013 : TreeKind::k2014);
     s.field->set_pose(skinning_matrices(rig, rest));
     s.tracker = make_tracker(sk, *s.field, options.grain);
-    if (setup.axis_guard) s.guard = std::make_unique<AxisGuard>(sk.fitted());
+    // The axis guard repairs the 2014 relaxation; one energy needs no repair pass.
+    if (setup.axis_guard && setup.tracker.relaxation != track::Relaxation::kEnergy)
+      s.guard = std::make_unique<AxisGuard>(sk.fitted());
   } else if (method == Method::kImplicit2013) {
     s.field = &sk.field(setup.tree == TreeKind::k2014 ? TreeKind::k2014 : TreeKind::k2013);
     s.field->set_pose(skinning_matrices(rig, rest));
@@ -485,6 +503,7 @@ void start_bake(Skinner& sk, Method method, const BakeOptions& options, BakeStat
   if (geometric == InitialSkinning::kDdm) s.ddm = &sk.ddm();
   if (geometric == InitialSkinning::kCor) s.cor = &sk.cor();
   s.current = rig.rest;
+  s.prev_dqs = rig.rest;  // DQS at the rest pose
   s.previous = rest;
   s.prev_skin = skinning_matrices(rig, rest);
   if (method == Method::kTracking2014 || method == Method::kImplicit2013) {

@@ -372,6 +372,25 @@ void read_tracker_rigid(const json& t, const std::string& w, SkinSetup& s) {
   require(s.small_part_vertices >= 0, w + ".small_part_vertices", "must be >= 0", "use e.g. 100");
 }
 
+/// Keys `tracker.energy_*`: the local–global solve's options (track::EnergyTrackerOptions).
+void read_tracker_energy(const json& t, const std::string& w, track::EnergyTrackerOptions& e) {
+  read(t, "energy_iso_weight", e.iso_weight, w);
+  require(std::isfinite(e.iso_weight) && e.iso_weight > 0.f, w + ".energy_iso_weight", "must be > 0",
+          "use 10 (the default)");
+  read(t, "energy_anchor_weight", e.anchor_weight, w);
+  require(std::isfinite(e.anchor_weight) && e.anchor_weight >= 0.f, w + ".energy_anchor_weight",
+          "must be >= 0", "use 100 (the default)");
+  read(t, "energy_contact_offset", e.contact_offset, w);
+  require(std::isfinite(e.contact_offset) && e.contact_offset >= 0.f, w + ".energy_contact_offset",
+          "must be >= 0 (edges)", "use 0.1 (the default)");
+  read(t, "energy_max_search", e.max_search, w);
+  require(std::isfinite(e.max_search) && e.max_search > 0.f, w + ".energy_max_search", "must be > 0 (edges)",
+          "use 1 (the default)");
+  read(t, "energy_anderson_window", e.anderson_window, w);
+  require(e.anderson_window >= 0 && e.anderson_window <= 20, w + ".energy_anderson_window",
+          "must be in [0, 20]", "use 5 (the default) or 0 (plain iterations)");
+}
+
 /// The keys section `tracker` may hold.
 void check_tracker_keys(const json& t, const std::string& w) {
   check_keys(t,
@@ -408,6 +427,11 @@ void check_tracker_keys(const json& t, const std::string& w) {
               "smoothing_reproject_steps",
               "iso_tolerance",
               "global_regularization",
+              "energy_iso_weight",
+              "energy_anchor_weight",
+              "energy_contact_offset",
+              "energy_max_search",
+              "energy_anderson_window",
               "anchor"},
              w);
 }
@@ -424,11 +448,14 @@ void read_tracker(const json& t, const std::string& w, SkinSetup& s) {
       s.tracker.relaxation = track::Relaxation::kConjugateGradient;
     else if (relaxation == "jacobi")
       s.tracker.relaxation = track::Relaxation::kJacobi;
+    else if (relaxation == "energy")
+      s.tracker.relaxation = track::Relaxation::kEnergy;
     else
       require(relaxation == "global", w + ".relaxation", "unknown solver '" + relaxation + "'",
-              "use jacobi (2014, the default), global or cg");
+              "use energy, jacobi (2014), global or cg");
     if (relaxation == "global") s.tracker.relaxation = track::Relaxation::kGlobal;
   }
+  read_tracker_energy(t, w, s.tracker.energy);
   read(t, "max_iterations", s.tracker.max_iterations, w);
   read(t, "tolerance", s.tracker.tolerance, w);
   read(t, "sigma", s.tracker.sigma, w);

@@ -8,6 +8,8 @@
 
 #include <cstddef>
 
+#include "isokit/track/energy_tracker.h"
+
 namespace isokit::track {
 
 /// β-diffused Laplacian smoothing at contacts (2013 §5 eq. 7; the papers say "a few steps").
@@ -86,7 +88,14 @@ enum class Relaxation {
   /// factorisation, analysed once per tracker, serves as the preconditioner of the next solves —
   /// alternated with safeguarded Newton projections. Not in the papers (they solve by Jacobi
   /// sweeps); docs/tracking.md, "The global solve"; docs/decisions/global-tangent-solve.md.
-  kGlobal
+  kGlobal,
+  /// One energy, the ARAP energy of the rest mesh (rotations fitted per vertex) plus soft
+  /// constraints toward each vertex's iso-value, its contact crease or its anchor, minimised by
+  /// local–global iterations (EnergyTracker, energy_tracker.h; Projective Dynamics, Bouaziz et al.
+  /// 2014). Replaces every stage of the call: no Newton projection, no contact smoothing, no fold
+  /// or orientation repair; the prescribed rotations are not used. Not in the papers;
+  /// docs/tracking.md, "The energy solve"; docs/decisions/tracker-one-energy.md.
+  kEnergy
 };
 
 struct TrackerOptions {
@@ -196,6 +205,12 @@ struct TrackerOptions {
   /// another order). Default true; not in the papers; docs/tracking.md, step 2 "Internal vertex
   /// order".
   bool reorder_vertices{true};
+  /// With `relaxation = kEnergy`: the local–global solve's own options (weights, search, contact
+  /// set-back, Anderson window; EnergyTrackerOptions). Its iteration cap, tolerances, contact rule,
+  /// cotangent clamp, lost-gradient bound and grain are this struct's: `max_iterations`,
+  /// `tolerance`, `iso_tolerance`, `angle_contacts`, `contact_angle_deg`, `max_cotangent`,
+  /// `min_gradient` and `grain` replace the fields of the same names here.
+  EnergyTrackerOptions energy{};
 };
 
 }  // namespace isokit::track
