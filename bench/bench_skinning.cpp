@@ -9,6 +9,7 @@
 
 #include <cmath>
 #include <map>
+#include <tuple>
 #include <memory>
 
 #include "isokit/core/math.h"
@@ -20,17 +21,18 @@ namespace {
 
 using namespace isokit::skinning;
 
-Skinner& skinner(int vertices, double step) {
+Skinner& skinner(int vertices, double step, bool energy = false) {
   // The humanoid is polygonised once per vertex count (~50 s CPU at 170k); each sub-step size
   // gets its own Skinner (fit + trees, well under a second).
   static std::map<int, Rig> rigs;
-  static std::map<std::pair<int, double>, std::unique_ptr<Skinner>> cache;
-  auto& s = cache[{vertices, step}];
+  static std::map<std::tuple<int, double, bool>, std::unique_ptr<Skinner>> cache;
+  auto& s = cache[{vertices, step, energy}];
   if (!s) {
     auto it = rigs.find(vertices);
     if (it == rigs.end()) it = rigs.emplace(vertices, make_humanoid({vertices, true})).first;
     SkinSetup setup;
     setup.substeps.max_step_rad = step;
+    if (energy) setup.tracker.relaxation = isokit::track::Relaxation::kEnergy;
     s = std::make_unique<Skinner>(it->second, setup);
   }
   return *s;
@@ -84,6 +86,21 @@ void args(benchmark::internal::Benchmark* b) {
   }
 }
 BENCHMARK(BM_SkinFrame)->Apply(args)->UseManualTime()->Unit(benchmark::kMillisecond)->Iterations(1);
+
+// tracking2014 with the energy solve (tracker.relaxation "energy", docs/tracking.md "The energy
+// solve") on BM_SkinFrame's bend, beside BM_SkinFrame/1/13000/50 (dqs) in the same run.
+// Args: vertices, step in milliradians.
+void BM_SkinFrameEnergy(benchmark::State& state) {
+  const int vertices = static_cast<int>(state.range(0));
+  const double step = double(state.range(1)) / 1000.0;
+  Skinner& sk = skinner(vertices, step, true);
+  const std::vector<Pose> poses = bend_animation(
+      sk.rig(), {parse_bend("LeftForeArm:x:150", sk.rig()), parse_bend("LeftLeg:x:150", sk.rig())}, 9);
+  bake_and_count(state, sk, Method::kTracking2014, poses);
+  state.SetLabel("tracking2014 energy " + std::to_string(sk.rig().rest.rows()) + " vertices, step " +
+                 std::to_string(step).substr(0, 5) + " rad");
+}
+BENCHMARK(BM_SkinFrameEnergy)->Args({13000, 50})->UseManualTime()->Unit(benchmark::kMillisecond)->Iterations(1);
 
 // The 2014 paper's Table 1 protocol ("all joints are animated simultaneously"; time step =
 // radians per animation step): spine, neck, head, shoulders, elbows, wrists, fingers, hips,

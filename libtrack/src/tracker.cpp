@@ -34,7 +34,8 @@ void reorder(detail::TrackerModel& m) {
 
 /// Relaxation::kEnergy: the local–global solve's options, with the fields TrackerOptions shares.
 EnergyTrackerOptions energy_options(const TrackerOptions& o) {
-  EnergyTrackerOptions e = o.energy;
+  EnergyTrackerOptions e;
+  static_cast<EnergySolveOptions&>(e) = o.energy;
   e.max_iterations = o.max_iterations;
   e.tolerance = o.tolerance;
   e.iso_tolerance = o.iso_tolerance;
@@ -99,6 +100,10 @@ void IsoSurfaceTracker::set_relaxation_mask(std::vector<float> mask) {
   for (std::size_t i = 0; i < mask.size(); ++i)
     require(mask[i] >= 0.f && mask[i] <= 1.f, "relaxation mask vertex " + std::to_string(i),
             "is outside [0, 1] (" + format_number(mask[i]) + ")", "use 0 (no tangential move) .. 1");
+  // The energy solve has no tangential step to scale: its mask is the anchor stiffness.
+  require(!m.energy || std::all_of(mask.begin(), mask.end(), [](float v) { return v >= 1.f; }),
+          "relaxation mask", "has no effect with the energy solve (Relaxation::kEnergy)",
+          "pass 1 - mask to set_anchor_stiffness instead");
   m.mask = m.order.empty() ? std::move(mask) : detail::permuted(mask, m.order);
   m.global.reset();  // the unknowns follow the mask
 }

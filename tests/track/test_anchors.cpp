@@ -166,4 +166,10 @@ TEST_CASE("anchors: bad stiffness or anchors are refused naming the item",
   CHECK_THROWS_WITH(tracker.track(test::as_function(sc.field), {}, P, bad),
                     Catch::Contains("anchors vertex 2") && Catch::Contains("not finite"));
   CHECK(P == sc.start);  // nothing written on a refused call
+  // The energy solve has no tangential step for a relaxation mask to scale: a mask below 1 is
+  // refused with the fix (its anchors), all ones is accepted.
+  IsoSurfaceTracker energy(sc.mesh.V, sc.mesh.F, sc.iso, options_for(Relaxation::kEnergy));
+  energy.set_relaxation_mask(std::vector<float>(nv, 1.f));
+  CHECK_THROWS_WITH(energy.set_relaxation_mask(std::vector<float>(nv, 0.5f)),
+                    Catch::Contains("energy solve") && Catch::Contains("set_anchor_stiffness"));
 }

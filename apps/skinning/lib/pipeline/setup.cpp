@@ -372,8 +372,8 @@ void read_tracker_rigid(const json& t, const std::string& w, SkinSetup& s) {
   require(s.small_part_vertices >= 0, w + ".small_part_vertices", "must be >= 0", "use e.g. 100");
 }
 
-/// Keys `tracker.energy_*`: the local–global solve's options (track::EnergyTrackerOptions).
-void read_tracker_energy(const json& t, const std::string& w, track::EnergyTrackerOptions& e) {
+/// Keys `tracker.energy_*`: the local–global solve's options (track::EnergySolveOptions).
+void read_tracker_energy(const json& t, const std::string& w, track::EnergySolveOptions& e) {
   read(t, "energy_iso_weight", e.iso_weight, w);
   require(std::isfinite(e.iso_weight) && e.iso_weight > 0.f, w + ".energy_iso_weight", "must be > 0",
           "use 10 (the default)");

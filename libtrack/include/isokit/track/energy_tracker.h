@@ -51,9 +51,10 @@ namespace detail {
 struct EnergyModel;
 }
 
-/// Options of EnergyTracker (checked by its constructor). Lengths are in "edges" (a vertex's mean
-/// rest edge length) or in rest bounding-box diagonals.
-struct EnergyTrackerOptions {
+/// The energy solve's own options: its weights, target search, contact set-back, acceleration and
+/// energy test (TrackerOptions::energy holds them for `Relaxation::kEnergy`). Lengths are in
+/// "edges" (a vertex's mean rest edge length).
+struct EnergySolveOptions {
   /// μ: weight of the target term, Wi = μ Ai / Ā (dimensionless, > 0; default 10; not in the
   /// papers: Projective Skinning's constraint weights are per-element areas likewise).
   float iso_weight{10};
@@ -61,26 +62,16 @@ struct EnergyTrackerOptions {
   /// (dimensionless, ≥ 0; default 100, so k = 0.1 pulls as hard as the target term; not in the
   /// papers).
   float anchor_weight{100};
-  /// Per-corner clamp of the cotangent weights to [0, max_cotangent] (dimensionless, > 0; default
-  /// 10 as TrackerOptions::max_cotangent; not in the papers).
-  float max_cotangent{10};
   /// Reach of the target search along ∇f from xi (edges, > 0; default 1.0; not in the papers).
   float max_search{1};
   /// Field evaluations along the search line per vertex and iteration, besides the one at xi and
   /// the 3 crease bisections of a contact (count, ≥ 1; default 4; not in the papers).
   int search_steps{4};
-  /// Gradient turn along the search that marks a contact (degrees in (0, 180]; default 55,
-  /// Implicit Skinning 2013 §5).
-  float contact_angle_deg{55};
-  /// Detect contacts by the gradient turn (true, default; 2013 §5); false: only the field's flag.
-  bool angle_contacts{true};
   /// How far a contact vertex's target is set back from the crease, on the vertex's own side
   /// (edges, ≥ 0; default 0.1; not in the papers): the target term is a penalty, so the ARAP term
   /// pushes a compressed contact vertex past its target; the set-back keeps it, and its triangles,
   /// on its own side. The crease itself is located to 1/8 of the search step that crossed it.
   float contact_offset{0.1f};
-  /// Local–global iterations per call (count, ≥ 0; default 50).
-  int max_iterations{50};
   /// Anderson acceleration over the last `anderson_window` iterates (count, 0 – 64; default 5; 0 =
   /// plain local–global iterations). Not in Projective Dynamics; Peng et al. 2018 ("Anderson
   /// Acceleration for Geometry Optimization and Physics Simulation"), E kept monotone by rejecting
@@ -88,9 +79,6 @@ struct EnergyTrackerOptions {
   /// rate that slows with the resolution: the target term holds a vertex where its last projection
   /// put it (tests/track/test_energy_tracker.cpp has the measurements).
   int anderson_window{5};
-  /// Largest move of the plain global step that counts as stopped (rest bounding-box diagonals,
-  /// ≥ 0; default 1e-5).
-  float tolerance{1e-5f};
   /// Converged when (a) the plain global step lowers E by at most this fraction plus a floor,
   /// `E(xk) − E(Gk) ≤ energy_tolerance · E(xk) + Es`, `Es = (tolerance · diagonal)² · Σi (Wi + Ki +
   /// Σj wij)` (moves of `tolerance` everywhere: a call whose E falls to 0 converges), and (b) it
@@ -101,6 +89,26 @@ struct EnergyTrackerOptions {
   /// sliding modes), converged positions can lie much farther than `tolerance` from the fixed
   /// point. (fraction, ≥ 0; default 1e-6; not in the papers).
   double energy_tolerance{1e-6};
+};
+
+/// Options of EnergyTracker (checked by its constructor): the solve's own and those it shares with
+/// the 2014 tracker, with the meanings of TrackerOptions' fields of the same names (with
+/// `Relaxation::kEnergy`, IsoSurfaceTracker passes its own). Lengths in edges or rest bounding-box
+/// diagonals.
+struct EnergyTrackerOptions : EnergySolveOptions {
+  /// Per-corner clamp of the cotangent weights to [0, max_cotangent] (dimensionless, > 0; default
+  /// 10 as TrackerOptions::max_cotangent; not in the papers).
+  float max_cotangent{10};
+  /// Gradient turn along the search that marks a contact (degrees in (0, 180]; default 55,
+  /// Implicit Skinning 2013 §5).
+  float contact_angle_deg{55};
+  /// Detect contacts by the gradient turn (true, default; 2013 §5); false: only the field's flag.
+  bool angle_contacts{true};
+  /// Local–global iterations per call (count, ≥ 0; default 50).
+  int max_iterations{50};
+  /// Largest move of the plain global step that counts as stopped (rest bounding-box diagonals,
+  /// ≥ 0; default 1e-5).
+  float tolerance{1e-5f};
   /// |f − iso| under which a target counts as on its iso-value (field units, ≥ 0; default 1e-3;
   /// not in the papers). Also ends a vertex's search early at 1e-3 of it.
   float iso_tolerance{1e-3f};

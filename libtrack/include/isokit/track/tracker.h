@@ -64,7 +64,8 @@ class IsoSurfaceTracker {
   ~IsoSurfaceTracker();
 
   /// Per-vertex relaxation mask in [0, 1] (0 = no tangential move; default all 1).
-  /// \throw InputError for a wrong size or a value outside [0, 1].
+  /// \throw InputError for a wrong size or a value outside [0, 1], or a value below 1 with
+  /// Relaxation::kEnergy (no tangential step there: use `set_anchor_stiffness(1 - mask)`).
   void set_relaxation_mask(std::vector<float> mask);
 
   /// Per-vertex anchor stiffness k in [0, 1] (default all 0): the painted mask of 2014 Fig. 11 as a
@@ -94,7 +95,8 @@ class IsoSurfaceTracker {
   /// Vertices the fold and orientation repairs may move (1) or must leave in place (0); empty (the
   /// default): all.
   /// For callers that know where the mesh under-resolves the field (e.g. limbs of a few dozen
-  /// vertices, where smoothing would erase the shape). \throw InputError for a wrong size.
+  /// vertices, where smoothing would erase the shape); Relaxation::kEnergy has no repair and
+  /// ignores it. \throw InputError for a wrong size.
   void set_fold_repair_mask(std::vector<std::uint8_t> mask);
 
   /// Records the triangles that are inverted at rest with respect to `rest_field` (the field at

@@ -206,11 +206,10 @@ struct TrackerOptions {
   /// order".
   bool reorder_vertices{true};
   /// With `relaxation = kEnergy`: the local–global solve's own options (weights, search, contact
-  /// set-back, Anderson window; EnergyTrackerOptions). Its iteration cap, tolerances, contact rule,
-  /// cotangent clamp, lost-gradient bound and grain are this struct's: `max_iterations`,
-  /// `tolerance`, `iso_tolerance`, `angle_contacts`, `contact_angle_deg`, `max_cotangent`,
-  /// `min_gradient` and `grain` replace the fields of the same names here.
-  EnergyTrackerOptions energy{};
+  /// set-back, Anderson window, energy test; EnergySolveOptions). Its iteration cap, tolerances,
+  /// contact rule, cotangent clamp, lost-gradient bound and grain are this struct's fields of the
+  /// same names.
+  EnergySolveOptions energy{};
 };
 
 }  // namespace isokit::track

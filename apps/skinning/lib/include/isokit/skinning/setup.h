@@ -28,7 +28,7 @@
 /// `tree`: "auto" (the method's paper), "2013" or "2014". `default_operator`: "auto" (2014:
 /// contact, 2013: blend), "union", "blend", "bulge" or "contact". `tracker.relaxation`: "jacobi"
 /// (2014, the default), "global" (docs/decisions/global-tangent-solve.md), "cg" or "energy"
-/// (track::Relaxation; the energy solve's keys `tracker.energy_*`, track::EnergyTrackerOptions;
+/// (track::Relaxation; the energy solve's keys `tracker.energy_*`, track::EnergySolveOptions;
 /// docs/decisions/tracker-one-energy.md).
 ///
 /// Designed operators (docs/operators.md, "Using a designed operator in skinning"):
