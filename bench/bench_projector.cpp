@@ -7,13 +7,21 @@
 //    only the cap stops a vertex that makes no progress). Manual time = mean ms per frame; counters per
 //    frame: Newton steps, field evaluations, and the share of calls at the cap.
 //  - BM_FieldEval/<rig>/<path>: one evaluation of the composed field at every DQS vertex position
-//    of the clip's frames, by the projector's path (`batch`: the sparse evaluator, up to 127
-//    leaves) and by the instruction loop (`loop`); manual time = ns per point. Run it under
-//    `perf record` for the evaluation's profile.
+//    of the clip's frames, in the projector's batches; manual time = ns per point, counters: the
+//    leaves and the field's memory (MiB). Paths, A/B in one run:
+//      `fixed16`: the default (fixed16 grids, leaves culled per block of points);
+//      `float32`: the same evaluator over float32 grids (fit.grid_storage "float32");
+//      `plain`: fixed16 grids, no cull;
+//      `loop`: the instruction loop (ScalarEvaluator) over the default grids.
+//    Repeated leaves are evaluated once and max operands that cannot win are skipped on every
+//    path but `loop`. The evaluator before these
+//    changes is measured by the same benchmark built at an earlier commit (docs/performance.md).
+//    Run it under `perf record` for the evaluation's profile.
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <memory>
@@ -26,6 +34,7 @@
 #include "isokit/skinning/deform.h"
 #include "isokit/skinning/pipeline.h"
 #include "isokit/skinning/skin_field.h"
+#include "isokit/track/projector2013.h"
 
 namespace {
 
@@ -38,6 +47,7 @@ struct Case {
   Rig rig;
   std::vector<Pose> poses;
   std::unique_ptr<Skinner> isokit, paper;
+  std::unique_ptr<Skinner> float32;  ///< fit.grid_storage "float32", made on first use
 };
 
 Case& load_case(const std::string& file) {
@@ -96,12 +106,29 @@ void BM_Implicit2013(benchmark::State& state, const std::string& file, bool pape
   state.counters["capped_share"] = calls > 0 ? capped / calls : 0.0;
 }
 
-/// `loop`: the instruction loop (ScalarEvaluator, what programs of more than 63 leaves ran before
-/// the two-word leaf mask), else the projector's path (the batch evaluator: sparse up to 127).
-void BM_FieldEval(benchmark::State& state, const std::string& file, bool loop) {
+void storage_error(benchmark::State& state, Case& c, SkinField& field,
+                   const std::vector<std::vector<Vec3f>>& points,
+                   const std::vector<std::shared_ptr<const implicit::Pose>>& poses);
+
+/// The field of the path (`float32`: the float32 fit, made on first use).
+SkinField& path_field(Case& c, const std::string& path) {
+  if (path != "float32") return c.isokit->field(TreeKind::k2013);
+  if (!c.float32) {
+    SkinSetup s;
+    s.fit.grid_storage = implicit::GridStorage::float32;
+    c.float32 = std::make_unique<Skinner>(c.rig, s);
+  }
+  return c.float32->field(TreeKind::k2013);
+}
+
+void BM_FieldEval(benchmark::State& state, const std::string& file, const std::string& path) {
   Case* c = case_or_skip(state, file);
   if (!c) return;
-  SkinField& field = c->isokit->field(TreeKind::k2013);
+  if (c->poses.empty()) {
+    state.SkipWithError("the rig has no clip");
+    return;
+  }
+  SkinField& field = path_field(*c, path);
   std::vector<std::vector<Vec3f>> points;
   std::vector<std::shared_ptr<const implicit::Pose>> poses;
   for (const Pose& pose : c->poses) {
@@ -112,20 +139,24 @@ void BM_FieldEval(benchmark::State& state, const std::string& file, bool loop) {
     for (Eigen::Index v = 0; v < p.rows(); ++v) row[std::size_t(v)] = Vec3f{p(v, 0), p(v, 1), p(v, 2)};
     poses.push_back(field.pose_of(skin));
   }
+  implicit::BatchOptions options;
+  options.cull = path != "plain";
+  const std::size_t batch = track::ProjectorOptions{}.grain;  // the projector's batch size
   std::vector<float> values;
   std::vector<Vec3f> grads;
-  std::vector<std::uint8_t> contact;
   double count = 0;
   for (auto _ : state) {
     const auto t0 = std::chrono::steady_clock::now();
     for (std::size_t f = 0; f < points.size(); ++f) {
       const std::size_t n = points[f].size();
-      values.resize(n), grads.resize(n), contact.assign(n, 0);
-      if (loop) {
+      values.resize(n), grads.resize(n);
+      if (path == "loop") {
         implicit::ScalarEvaluator eval(field.program(), *poses[f]);
         for (std::size_t k = 0; k < n; ++k) values[k] = eval.eval(points[f][k], nullptr, true).value;
       } else {
-        field.function(poses[f])(points[f].data(), n, values.data(), grads.data(), contact.data());
+        implicit::BatchEvaluator eval(field.program(), *poses[f], options);
+        for (std::size_t b = 0; b < n; b += batch)
+          eval.eval(points[f].data() + b, std::min(batch, n - b), values.data() + b, grads.data() + b);
       }
       benchmark::DoNotOptimize(values.data());
       count += double(n);
@@ -133,9 +164,55 @@ void BM_FieldEval(benchmark::State& state, const std::string& file, bool loop) {
     state.SetIterationTime(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
   }
   state.counters["leaves"] = double(field.program().leaves().size());
-  state.counters["sparse"] = field.program().sparse() ? 1 : 0;
+  state.counters["field_MiB"] = double(field.program().memory_bytes()) / double(1 << 20);
   state.counters["ns_per_point"] =
       benchmark::Counter(count, benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+  if (path == "fixed16") storage_error(state, *c, field, points, poses);
+}
+
+/// The fixed16 field against the float32 one at the same points (counters): the value's
+/// difference and the gradient's angle (degrees, where both gradients are at least 1 % of the
+/// largest), worst and 99th percentile.
+void storage_error(benchmark::State& state, Case& c, SkinField& field,
+                   const std::vector<std::vector<Vec3f>>& points,
+                   const std::vector<std::shared_ptr<const implicit::Pose>>& poses) {
+  SkinField& reference = path_field(c, "float32");
+  std::vector<double> value, angle;
+  std::vector<implicit::FieldSample> a, b;
+  double largest = 0;
+  for (std::size_t f = 0; f < points.size(); ++f) {
+    const std::size_t n = points[f].size();
+    a.resize(n), b.resize(n);
+    implicit::BatchEvaluator(field.program(), *poses[f]).eval(points[f].data(), n, a.data());
+    const std::vector<Affine> skin = skinning_matrices(c.rig, c.poses[f]);
+    implicit::BatchEvaluator(reference.program(), *reference.pose_of(skin))
+        .eval(points[f].data(), n, b.data());
+    for (std::size_t k = 0; k < n; ++k) {
+      value.push_back(std::fabs(double(a[k].value) - double(b[k].value)));
+      largest = std::max(largest, double(norm(b[k].gradient)));
+    }
+    for (std::size_t k = 0; k < n; ++k) {
+      const double na = norm(a[k].gradient), nb = norm(b[k].gradient);
+      if (na < 0.01 * largest || nb < 0.01 * largest) continue;
+      const double cosine = std::clamp(double(dot(a[k].gradient, b[k].gradient)) / (na * nb), -1.0, 1.0);
+      angle.push_back(std::acos(cosine) * 180.0 / 3.14159265358979);
+    }
+  }
+  auto worst_and_p99 = [](std::vector<double>& v, double& worst, double& p99) {
+    worst = p99 = 0;
+    if (v.empty()) return;
+    std::sort(v.begin(), v.end());
+    worst = v.back();
+    p99 = v[std::min(v.size() - 1, std::size_t(0.99 * double(v.size())))];
+  };
+  double vw, vp, aw, ap;
+  worst_and_p99(value, vw, vp);
+  worst_and_p99(angle, aw, ap);
+  state.counters["value_err_max"] = vw;
+  state.counters["value_err_p99"] = vp;
+  state.counters["angle_deg_max"] = aw;
+  state.counters["angle_deg_p99"] = ap;
+  state.counters["float32_MiB"] = double(reference.program().memory_bytes()) / double(1 << 20);
 }
 
 }  // namespace
@@ -151,9 +228,9 @@ int main(int argc, char** argv) {
           ->Iterations(1)
           ->Repetitions(5)
           ->ReportAggregatesOnly(true);
-    for (const bool loop : {false, true})
-      benchmark::RegisterBenchmark(("BM_FieldEval/" + name + (loop ? "/loop" : "/batch")).c_str(),
-                                   [file, loop](benchmark::State& s) { BM_FieldEval(s, file, loop); })
+    for (const std::string path : {"fixed16", "float32", "plain", "loop"})
+      benchmark::RegisterBenchmark(("BM_FieldEval/" + name + "/" + path).c_str(),
+                                   [file, path](benchmark::State& s) { BM_FieldEval(s, file, path); })
           ->UseManualTime()
           ->Unit(benchmark::kMillisecond);
   }

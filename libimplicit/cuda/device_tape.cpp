@@ -51,15 +51,16 @@ struct DeviceTape::Impl {
   TapeSparseLayout view;  // device pointers
   std::size_t leaf_count{0};
   Buffer frames, lca, nodes, leaves, controllers, grids;
-  std::vector<Buffer> arrays;                      // leaf grids and operator data, uploaded once
-  std::map<const float*, const float*> device_of;  // host array -> its device copy
+  std::vector<Buffer> arrays;                    // leaf grids and operator data, uploaded once
+  std::map<const void*, const void*> device_of;  // host array -> its device copy
 
-  const float* upload_array(const float* host, std::size_t floats) {
+  template <class T>
+  const T* upload_array(const T* host, std::size_t count) {
     if (!host) return nullptr;
     const auto it = device_of.find(host);
-    if (it != device_of.end()) return it->second;
-    arrays.emplace_back(host, floats * sizeof(float));
-    const float* d = arrays.back().as<const float>();
+    if (it != device_of.end()) return static_cast<const T*>(it->second);
+    arrays.emplace_back(host, count * sizeof(T));
+    const T* d = arrays.back().as<const T>();
     device_of[host] = d;
     return d;
   }
@@ -67,7 +68,10 @@ struct DeviceTape::Impl {
     std::vector<TapeLeaf> records(l.leaf_records, l.leaf_records + l.leaves);
     for (TapeLeaf& leaf : records) {
       const std::size_t n = static_cast<std::size_t>(leaf.grid.n);
+      // Either storage (grid_math.h): the view's pointer that is set is re-targeted.
       leaf.grid.nodes = upload_array(leaf.grid.nodes, 4 * n * n * n);
+      leaf.grid.packed = upload_array(leaf.grid.packed, 4 * n * n * n);
+      leaf.grid.occupied = nullptr;  // the device code evaluates every leaf whose box holds the point
     }
     leaves.assign(records.data(), records.size() * sizeof(TapeLeaf));
     frames.assign(l.frames, 18 * l.frame_stride * sizeof(float));
@@ -79,7 +83,7 @@ struct DeviceTape::Impl {
 DeviceTape::DeviceTape(const Program& program, const Pose& pose) : impl_(std::make_unique<Impl>()) {
   const TapeSparseLayout l = sparse_layout(program, pose);
   for (std::size_t k = 0; k < l.leaves; ++k)
-    require(l.leaf_records[k].grid.nodes != nullptr, "program leaf " + std::to_string(k),
+    require(l.leaf_records[k].grid.valid(), "program leaf " + std::to_string(k),
             "is not a sampled grid (only grid leaves run on the device)", "sample the primitives into grids");
   Impl& d = *impl_;
   d.leaf_count = l.leaves;

@@ -96,10 +96,19 @@ void eval_capsule(const CapsuleParamsT<float>& c, const Vec3f* points, std::size
 }
 
 void eval_grid(const GridView& grid, const Vec3f* points, std::size_t n, FieldSample* out) {
+  // Either storage (grid_math.h): 4 channels per node, as floats or as int16.
   const std::size_t count = 4 * static_cast<std::size_t>(grid.n) * grid.n * grid.n;
+  GridView dg = grid;
+  dg.occupied = nullptr;  // host memory; eval_grid does not read it
+  if (grid.packed) {
+    DeviceArray<std::int16_t> d_packed(count);
+    d_packed.upload(grid.packed);
+    dg.packed = d_packed.get();
+    run(GridEval{dg}, points, n, out);
+    return;
+  }
   DeviceArray<float> d_nodes(count);
   d_nodes.upload(grid.nodes);
-  GridView dg = grid;
   dg.nodes = d_nodes.get();
   run(GridEval{dg}, points, n, out);
 }

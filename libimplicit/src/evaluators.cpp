@@ -36,7 +36,9 @@ void require_fits(const Program& program, const Pose& pose) {
 /// Bit k set when leaf k's local box contains its local point `q_k = R_k^T (p - t_k)`, written to
 /// q (3 rows of `m` floats). `frames`: see Pose::frames. The same operations, in the same order,
 /// as `Rigid3f::apply_inverse` and `Box3f::contains` (the same bits).
-LeafMask local_points(const float* frames, std::size_t m, const Vec3f& p, float* q) {
+/// Only the groups of four leaves with a bit in `candidates` are computed (the others' bits are
+/// 0 and their rows of q left alone).
+LeafMask local_points(const float* frames, std::size_t m, const Vec3f& p, float* q, LeafMask candidates) {
   LeafMask mask = 0;
   const float* R = frames;
   const float* t = frames + 9 * m;
@@ -45,6 +47,7 @@ LeafMask local_points(const float* frames, std::size_t m, const Vec3f& p, float*
 #if defined(__SSE2__)
   const __m128 px = _mm_set1_ps(p.x), py = _mm_set1_ps(p.y), pz = _mm_set1_ps(p.z);
   for (std::size_t k = 0; k < m; k += 4) {
+    if (!((candidates >> k) & 0xF)) continue;
     const __m128 dx = _mm_sub_ps(px, _mm_loadu_ps(t + k)), dy = _mm_sub_ps(py, _mm_loadu_ps(t + m + k)),
                  dz = _mm_sub_ps(pz, _mm_loadu_ps(t + 2 * m + k));
     __m128 in = _mm_set1_ps(0.f);
@@ -62,6 +65,7 @@ LeafMask local_points(const float* frames, std::size_t m, const Vec3f& p, float*
   }
 #else
   for (std::size_t k = 0; k < m; ++k) {
+    if (!((candidates >> k) & 1)) continue;
     const float dx = p.x - t[k], dy = p.y - t[m + k], dz = p.z - t[2 * m + k];
     bool in = true;
     for (std::size_t c = 0; c < 3; ++c) {
@@ -72,7 +76,7 @@ LeafMask local_points(const float* frames, std::size_t m, const Vec3f& p, float*
     mask |= LeafMask(in) << k;
   }
 #endif
-  return mask;
+  return mask & candidates;  // a computed group's other lanes are not asked for
 }
 
 }  // namespace
@@ -114,7 +118,7 @@ FieldSample ScalarEvaluator::eval(const Vec3f& p, NodeDiagnostics* diag, bool pr
     if (in.leaf >= 0) {
       const TapeLeaf& l = leaves[std::size_t(in.leaf)];
       const Vec3f q = l.local_to_world.apply_inverse(p);
-      FieldSample s = l.grid.nodes ? eval_grid(l.grid, q) : program_.field(std::size_t(l.field)).eval(q);
+      FieldSample s = l.grid.valid() ? eval_grid(l.grid, q) : program_.field(std::size_t(l.field)).eval(q);
       s.gradient = l.local_to_world.rotate(s.gradient);
       new (&st[sp++]) FieldSample(s);
       if (diag) diag[i] = NodeDiagnostics{0.f, 0.f, s.value, 1, 0, 0};
@@ -139,6 +143,7 @@ FieldSample ScalarEvaluator::eval(const Vec3f& p, NodeDiagnostics* diag, bool pr
 // SparseEvaluator
 
 SparseEvaluator::SparseEvaluator(const Program& program, const Pose& pose) : program_(program), pose_(pose) {
+  distinct_ = LeafMask(pose.distinct_leaves()[0]) | LeafMask(pose.distinct_leaves()[1]) << 64;
   // Made once per point by ProgramField::eval: no message is built unless it fails.
   if (!program.sparse())
     require(false, "program", "is not evaluated sparsely (2 to 127 leaves and a root node are needed)",
@@ -155,24 +160,39 @@ FieldSample SparseEvaluator::eval(const Vec3f& p) const {
   return compose(leaves, samples);
 }
 
-LeafMask SparseEvaluator::eval_leaves(const Vec3f& p, FieldSample* samples) const {
-  // The point in every leaf's frame, and which leaves' local boxes contain it; only those are
-  // evaluated, and only the ones with a non-zero value are kept (a leaf with value 0 is passed
-  // over by every node above it, whatever its gradient, as by compose_node).
-  const std::size_t m = program_.frame_stride();
+LeafMask SparseEvaluator::eval_leaves(const Vec3f& p, FieldSample* samples, LeafMask candidates) const {
   alignas(16) float q[3 * ((Program::kSparseMaxLeaves + 3) / 4 * 4)];  // 3 rows of frame_stride
-  LeafMask pending = local_points(pose_.frames().data(), m, p, q), nonzero = 0;
+  return eval_located(locate(p, q, candidates), q, samples);
+}
+
+LeafMask SparseEvaluator::locate(const Vec3f& p, float* q, LeafMask candidates) const {
+  // The point in every distinct candidate leaf's frame, and which leaves' local boxes contain it.
+  return local_points(pose_.frames().data(), program_.frame_stride(), p, q, candidates & distinct_);
+}
+
+LeafMask SparseEvaluator::eval_located(LeafMask inside, const float* q, FieldSample* samples) const {
+  // Only the leaves containing the point are evaluated, and only the ones with a non-zero value
+  // are kept (a leaf with value 0 is passed over by every node above it, whatever its gradient,
+  // as by compose_node). A non-zero sample is copied to the leaves that repeat its leaf
+  // (Pose::leaf_copies).
+  const std::size_t m = program_.frame_stride();
   const std::vector<TapeLeaf>& leaves = pose_.leaves();
-  while (pending) {
-    const int k = lowest_bit(pending);
-    pending &= pending - 1;
+  const std::uint64_t* copies = pose_.leaf_copies().data();
+  LeafMask nonzero = 0;
+  while (inside) {
+    const int k = lowest_bit(inside);
+    inside &= inside - 1;
     const TapeLeaf& l = leaves[std::size_t(k)];
     const Vec3f local{q[std::size_t(k)], q[m + std::size_t(k)], q[2 * m + std::size_t(k)]};
+    if (l.grid.valid() && !grid_cell_occupied(l.grid, local)) continue;  // its value is 0 there
     FieldSample s =
-        l.grid.nodes ? eval_grid_inside(l.grid, local) : program_.field(std::size_t(l.field)).eval(local);
+        l.grid.valid() ? eval_grid_inside(l.grid, local) : program_.field(std::size_t(l.field)).eval(local);
     s.gradient = l.local_to_world.rotate(s.gradient);
-    samples[k] = s;  // read only when non-zero (no branch: the outcome is data dependent)
-    nonzero |= LeafMask(s.value != 0.f) << k;
+    samples[k] = s;  // read only when non-zero
+    if (s.value == 0.f) continue;
+    LeafMask same = LeafMask(1) << k | LeafMask(copies[2 * k]) | LeafMask(copies[2 * k + 1]) << 64;
+    nonzero |= same;
+    for (same &= same - 1; same; same &= same - 1) samples[lowest_bit(same)] = s;
   }
   return nonzero;
 }
@@ -186,6 +206,7 @@ FieldSample SparseEvaluator::compose(LeafMask leaves, const FieldSample* samples
   const std::size_t count = pose_.leaves().size();
   const TapeSparseNode& node =
       program_.sparse_nodes()[program_.lca()[std::size_t(a) * count + std::size_t(b)]];
+  if (node.kind == OpKind::Max) return compose_max(leaves, samples);
   const LeafMask first = leaves & ((LeafMask(1) << node.mid) - 1), second = leaves & ~first;
   const FieldSample fa = (first & (first - 1)) ? compose(first, samples) : samples[a];
   const FieldSample fb = (second & (second - 1)) ? compose(second, samples) : samples[b];
@@ -193,11 +214,88 @@ FieldSample SparseEvaluator::compose(LeafMask leaves, const FieldSample* samples
   return compose_node(node.kind, pose_.controllers()[o], program_.grids()[o], fa, fb, nullptr);
 }
 
+namespace {
+
+/// An operand of a run of max nodes: its leaves and an upper bound of its value.
+struct MaxOperand {
+  LeafMask leaves;
+  float bound;
+};
+
+}  // namespace
+
+float SparseEvaluator::upper_bound(LeafMask leaves, const FieldSample* samples) const {
+  // A single leaf's value; a grid operator over two single leaves: its cell's bound
+  // (Program::grid_bounds); anything else: no bound.
+  if (!(leaves & (leaves - 1))) return samples[lowest_bit(leaves)].value;
+  const int a = lowest_bit(leaves), b = highest_bit(leaves);
+  const std::size_t count = pose_.leaves().size();
+  const TapeSparseNode& node =
+      program_.sparse_nodes()[program_.lca()[std::size_t(a) * count + std::size_t(b)]];
+  const float* table = program_.grid_bounds()[std::size_t(node.op)];
+  const LeafMask first = leaves & ((LeafMask(1) << node.mid) - 1);
+  if (node.kind != OpKind::Grid || !table || (first & (first - 1)) ||
+      ((leaves & ~first) & ((leaves & ~first) - 1)))
+    return INFINITY;
+  const operators::GridOperatorView& g = program_.grids()[std::size_t(node.op)];
+  int i1 = 0, i2 = 0;
+  float t = 0.f;
+  g.locate(samples[a].value, i1, t);
+  g.locate(samples[b].value, i2, t);
+  return table[std::size_t(i1) * std::size_t(g.nf - 1) + std::size_t(i2)];
+}
+
+FieldSample SparseEvaluator::compose_max(LeafMask leaves, const FieldSample* samples) const {
+  // The operands of the run of max nodes below the lowest common ancestor (itself a max), left
+  // to right; the result is the leftmost non-zero operand of the largest value (max keeps its
+  // first operand on a tie, and every node passes a zero operand over), else 0. Operands are composed in
+  // decreasing order of their upper bounds, until the next bound is below the best value found: none of the
+  // rest can reach it.
+  MaxOperand operands[Program::kSparseMaxLeaves + 1];
+  int count = 0;
+  LeafMask stack[Program::kSparseMaxLeaves + 1];
+  int top = 0;
+  stack[top++] = leaves;
+  const std::size_t L = pose_.leaves().size();
+  while (top > 0) {
+    const LeafMask m = stack[--top];
+    if (m & (m - 1)) {
+      const int a = lowest_bit(m), b = highest_bit(m);
+      const TapeSparseNode& node =
+          program_.sparse_nodes()[program_.lca()[std::size_t(a) * L + std::size_t(b)]];
+      if (node.kind == OpKind::Max) {
+        const LeafMask first = m & ((LeafMask(1) << node.mid) - 1);
+        stack[top++] = m & ~first;  // taken after the first
+        stack[top++] = first;
+        continue;
+      }
+    }
+    operands[count++] = MaxOperand{m, upper_bound(m, samples)};
+  }
+  FieldSample best;
+  int best_index = -1;
+  for (int done = 0; done < count; ++done) {
+    int next = -1;
+    for (int i = 0; i < count; ++i)
+      if (operands[i].leaves && (next < 0 || operands[i].bound > operands[next].bound)) next = i;
+    if (best_index >= 0 && operands[next].bound < best.value) break;
+    const LeafMask m = operands[next].leaves;
+    operands[next].leaves = 0;  // taken
+    const FieldSample s = (m & (m - 1)) ? compose(m, samples) : samples[lowest_bit(m)];
+    if (s.value == 0.f) continue;  // passed over by the max nodes above it (compose_node's rule)
+    if (best_index < 0 || s.value > best.value || (s.value == best.value && next < best_index)) {
+      best = s;
+      best_index = next;
+    }
+  }
+  return best_index < 0 ? FieldSample{} : best;
+}
+
 // ---------------------------------------------------------------------------------------------
 // BatchEvaluator
 
-BatchEvaluator::BatchEvaluator(const Program& program, const Pose& pose)
-    : program_(program), pose_(pose), scalar_(program, pose) {
+BatchEvaluator::BatchEvaluator(const Program& program, const Pose& pose, const BatchOptions& options)
+    : program_(program), pose_(pose), options_(options), scalar_(program, pose) {
   if (program.sparse()) samples_.resize(kBlock * (program.leaves().size() + 1));
 }
 
@@ -221,6 +319,40 @@ void BatchEvaluator::eval(const Vec3f* points, std::size_t n, float* values, Vec
   }
 }
 
+namespace {
+
+/// The box of the points, NaN coordinates skipped (empty when there is none).
+Box3f points_box(const Vec3f* points, std::size_t n) {
+  Box3f b;
+  b.lo = Vec3f{INFINITY, INFINITY, INFINITY};
+  b.hi = Vec3f{-INFINITY, -INFINITY, -INFINITY};
+  for (std::size_t i = 0; i < n; ++i)
+    for (int c = 0; c < 3; ++c) {
+      const float v = points[i][c];
+      b.lo[c] = v < b.lo[c] ? v : b.lo[c];
+      b.hi[c] = v > b.hi[c] ? v : b.hi[c];
+    }
+  return b;
+}
+
+}  // namespace
+
+LeafMask BatchEvaluator::block_candidates(const Vec3f* points, std::size_t count) const {
+  const std::size_t L = program_.leaves().size();
+  if (!options_.cull) return (LeafMask(1) << L) - 1;
+  const Box3f b = points_box(points, count);
+  const std::size_t m = program_.frame_stride();
+  const float* boxes = pose_.leaf_boxes().data();
+  LeafMask mask = 0;
+  for (std::size_t k = 0; k < L; ++k) {
+    bool meets = true;
+    for (std::size_t c = 0; c < 3; ++c)
+      meets = meets & (boxes[c * m + k] <= b.hi[int(c)]) & (boxes[(3 + c) * m + k] >= b.lo[int(c)]);
+    mask |= LeafMask(meets) << k;
+  }
+  return mask;
+}
+
 void BatchEvaluator::eval_block(const Vec3f* points, std::size_t count, FieldSample* out) {
   // Three passes: the leaves of every point; the result of every point with at most one
   // non-zero leaf (read without a branch: slot L of a row stays 0); then the compositions of
@@ -229,7 +361,9 @@ void BatchEvaluator::eval_block(const Vec3f* points, std::size_t count, FieldSam
   const std::size_t L = program_.leaves().size(), row = L + 1;
   LeafMask masks[kBlock];
   std::uint32_t pending[kBlock];
-  for (std::size_t j = 0; j < count; ++j) masks[j] = sparse.eval_leaves(points[j], samples_.data() + j * row);
+  const LeafMask candidates = block_candidates(points, count);
+  for (std::size_t j = 0; j < count; ++j)
+    masks[j] = candidates ? sparse.eval_leaves(points[j], samples_.data() + j * row, candidates) : 0;
   std::size_t np = 0;
   for (std::size_t j = 0; j < count; ++j) {
     const LeafMask leaves = masks[j];

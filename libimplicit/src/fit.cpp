@@ -324,6 +324,7 @@ FittedPart fit_part_closed(const MeshPart& part, const PartFitOptions& o) {
   if (o.sample_grid) {
     GridFieldOptions go;
     go.resolution = o.grid_resolution;
+    go.storage = o.grid_storage;
     out.grid = std::make_shared<const GridField>(*out.local, out.local->support(), go);
   }
   return out;

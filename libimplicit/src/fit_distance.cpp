@@ -489,7 +489,7 @@ FittedPart fit_part_distance(const MeshPart& part, const PartFitOptions& options
   out.r = r;
   const Box3f box{{float(L.box.lo.x), float(L.box.lo.y), float(L.box.lo.z)},
                   {float(L.box.hi.x), float(L.box.hi.y), float(L.box.hi.z)}};
-  out.grid = std::make_shared<const GridField>(L.n, box, remapped_nodes(L, d, r));
+  out.grid = std::make_shared<const GridField>(L.n, box, remapped_nodes(L, d, r), options.grid_storage);
   return out;
 }
 

@@ -18,7 +18,8 @@ namespace {
 
 /// The capsule on the segment `a`–`b` (world) whose radius is the median distance of the part's
 /// vertices to the segment, sampled into a grid.
-FittedPart capsule_on(const MeshPart& part, const Vec3d& a, const Vec3d& b, int resolution) {
+FittedPart capsule_on(const MeshPart& part, const Vec3d& a, const Vec3d& b, int resolution,
+                      GridStorage storage) {
   FittedPart out;
   out.local_to_world = bone_frame(a, b);
   const double len = norm(b - a);
@@ -33,6 +34,7 @@ FittedPart capsule_on(const MeshPart& part, const Vec3d& a, const Vec3d& b, int 
   const CapsuleField capsule({0, 0, 0}, {0, 0, float(len)}, float(radius), float(radius));
   GridFieldOptions go;
   go.resolution = resolution;
+  go.storage = storage;
   out.grid = std::make_shared<const GridField>(capsule, capsule.support(), go);
   return out;
 }
@@ -79,12 +81,12 @@ FittedPart fit_capsule(const MeshPart& part, const PartFitOptions& o) {
   require(extent > 0, name, "all vertices lie on one point", "give the part real triangles");
   std::vector<FittedPart> tries;
   if (norm(part.bone_end - part.bone_start) > 1e-6 * extent)
-    tries.push_back(capsule_on(part, part.bone_start, part.bone_end, o.grid_resolution));
+    tries.push_back(capsule_on(part, part.bone_start, part.bone_end, o.grid_resolution, o.grid_storage));
   Vec3d a, b;
   principal_segment(part.vertices, 0, a, b);
-  const double r0 = capsule_on(part, a, b, 8).r;  // the radius before shrinking the ends
+  const double r0 = capsule_on(part, a, b, 8, o.grid_storage).r;  // the radius before shrinking the ends
   principal_segment(part.vertices, r0, a, b);
-  tries.push_back(capsule_on(part, a, b, o.grid_resolution));
+  tries.push_back(capsule_on(part, a, b, o.grid_resolution, o.grid_storage));
   if (tries.size() == 1 || part.triangles.empty()) return tries.back();
   return score(tries[0], part) <= score(tries[1], part) ? tries[0] : tries[1];
 }

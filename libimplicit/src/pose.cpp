@@ -3,6 +3,7 @@
 // boxes per instruction, the leaves' frames for the sparse evaluator).
 #include "isokit/implicit/pose.h"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -87,7 +88,6 @@ void Pose::set_controller(const Program& program, std::size_t instruction,
 }
 
 void Pose::update(const Program& program) {
-  if (program.sparse()) update_frames(program);
   // World boxes in post-order: a leaf's is its support moved by its transform, a node's the
   // union of its children's.
   const std::vector<TapeInstr>& instr = program.instructions();
@@ -116,6 +116,32 @@ void Pose::update(const Program& program) {
     }
     st.push_back(std::int32_t(i));
   }
+  if (program.sparse()) update_frames(program), update_copies(program);
+}
+
+void Pose::update_copies(const Program& program) {
+  const std::size_t L = leaves_.size();
+  leaf_copies_.assign(2 * L, 0);
+  distinct_[0] = distinct_[1] = 0;
+  auto same = [](const Rigid3f& a, const Rigid3f& b) {
+    for (int c = 0; c < 9; ++c)
+      if (!(a.R.m[c] == b.R.m[c])) return false;
+    return a.t.x == b.t.x && a.t.y == b.t.y && a.t.z == b.t.z;
+  };
+  for (std::size_t k = 0; k < L; ++k) {
+    // The first equal leaf is distinct itself (equality is transitive).
+    std::size_t first = 0;
+    const Field* f = &program.field(std::size_t(leaves_[k].field));
+    while (first < k && !(&program.field(std::size_t(leaves_[first].field)) == f &&
+                          same(leaves_[first].local_to_world, leaves_[k].local_to_world) &&
+                          scales_[first].x == scales_[k].x && scales_[first].y == scales_[k].y &&
+                          scales_[first].z == scales_[k].z))
+      ++first;
+    if (first == k)
+      distinct_[k / 64] |= std::uint64_t(1) << (k % 64);
+    else
+      leaf_copies_[2 * first + k / 64] |= std::uint64_t(1) << (k % 64);
+  }
 }
 
 void Pose::update_frames(const Program& program) {
@@ -135,6 +161,26 @@ void Pose::update_frames(const Program& program) {
     for (int c = 0; c < 3; ++c) {
       frames_[std::size_t(12 + c) * m + k] = box.lo[c];
       frames_[std::size_t(15 + c) * m + k] = box.hi[c];
+    }
+  }
+  // The leaves' world boxes (the instructions' boxes), grown past the rounding of the frame
+  // test so that a point outside one is outside the leaf's local box too.
+  leaf_boxes_.assign(6 * m, 0.f);
+  for (std::size_t k = 0; k < m; ++k)
+    for (int c = 0; c < 3; ++c)
+      leaf_boxes_[std::size_t(c) * m + k] = INFINITY, leaf_boxes_[std::size_t(3 + c) * m + k] = -INFINITY;
+  const std::vector<TapeInstr>& instr = program.instructions();
+  for (std::size_t i = 0; i < instr.size(); ++i) {
+    if (instr[i].leaf < 0) continue;
+    const Box3f& b = boxes_[i];
+    if (b.empty()) continue;
+    const auto k = std::size_t(instr[i].leaf);
+    float reach = 0.f;
+    for (int c = 0; c < 3; ++c) reach = std::max({reach, std::fabs(b.lo[c]), std::fabs(b.hi[c])});
+    const float grow = 1e-4f * reach;
+    for (int c = 0; c < 3; ++c) {
+      leaf_boxes_[std::size_t(c) * m + k] = b.lo[c] - grow;
+      leaf_boxes_[std::size_t(3 + c) * m + k] = b.hi[c] + grow;
     }
   }
 }

@@ -5,6 +5,7 @@
 #include "isokit/implicit/program.h"
 
 #include <algorithm>
+#include <cmath>
 #include <string>
 #include <utility>
 
@@ -70,26 +71,60 @@ void Program::add_leaf(const FieldPtr& field, const Rigid3f& xf, int id) {
   tags_.push_back(NodeTag{});
 }
 
+namespace {
+
+/// Upper bounds of a grid operator's bicubic interpolant per (f1, f2) cell over every slice
+/// (Program::grid_bounds), from its padded samples.
+std::vector<float> grid_bound_table(const operators::GridOperatorView& g) {
+  const int nf = g.nf, n = nf + 2, cells = nf - 1;
+  std::vector<float> out(std::size_t(cells) * std::size_t(cells));
+  for (int i1 = 0; i1 < cells; ++i1)
+    for (int i2 = 0; i2 < cells; ++i2) {
+      float hi = -INFINITY, lo = INFINITY;
+      for (int k = 0; k < g.nd; ++k)
+        for (int a = 0; a < 4; ++a)
+          for (int b = 0; b < 4; ++b) {
+            // Padded rows i1 .. i1 + 3 are the stencil rows i1 - 1 .. i1 + 2 of the samples.
+            const float v =
+                g.padded[(std::size_t(k) * std::size_t(n) + std::size_t(i1 + a)) * std::size_t(n) +
+                         std::size_t(i2 + b)];
+            hi = std::max(hi, v);
+            lo = std::min(lo, v);
+          }
+      out[std::size_t(i1) * std::size_t(cells) + std::size_t(i2)] =
+          hi + 0.28125f * (hi - lo) + 1e-4f * (1.f + std::fabs(hi) + std::fabs(lo));
+    }
+  return out;
+}
+
+}  // namespace
+
 std::int32_t Program::add_operator(const NodeOperator& op) {
   const std::int32_t index = std::int32_t(controllers_.size());
   controllers_.push_back(op.controller);
   operators::GridOperatorView gv{};
+  const float* bounds = nullptr;
   if (op.grid) {
     // One padded copy per grid operator (edge-free stencils; same results), shared by the nodes
-    // that use it and by copies of the program.
+    // that use it and by copies of the program; the same for its bound table.
     std::size_t same = 0;
     while (same < grid_owners_.size() && grid_owners_[same] != op.grid) ++same;
     if (same < grid_owners_.size()) {
       gv = grids_[same];
+      bounds = grid_bounds_[same];
     } else {
       gv = op.grid->view();
       auto padded = std::make_shared<std::vector<float>>(gv.padded_size());
       gv.fill_padded(padded->data());
       gv.padded = padded->data();
       padded_grids_.push_back(std::move(padded));
+      auto table = std::make_shared<const std::vector<float>>(grid_bound_table(gv));
+      bounds = table->data();
+      bound_tables_.push_back(std::move(table));
     }
   }
   grids_.push_back(gv);
+  grid_bounds_.push_back(bounds);
   grid_owners_.push_back(op.grid);
   return index;
 }
@@ -128,7 +163,27 @@ void Program::build_sparse() {
 Box3f Program::leaf_test_box(std::size_t leaf) const {
   const TapeLeaf& l = leaves_[leaf];
   // A grid leaf's box is the one eval_grid tests; any field is 0 outside its support.
-  return l.grid.nodes ? l.grid.box : supports_[leaf];
+  return l.grid.valid() ? l.grid.box : supports_[leaf];
+}
+
+std::size_t Program::memory_bytes() const {
+  std::size_t bytes = 0;
+  for (std::size_t i = 0; i < fields_.size(); ++i) {
+    const auto* g = dynamic_cast<const GridField*>(fields_[i].get());
+    bool first = true;
+    for (std::size_t j = 0; j < i && first; ++j) first = fields_[j] != fields_[i];
+    if (g && first) bytes += g->bytes();
+  }
+  for (std::size_t i = 0; i < grids_.size(); ++i) {
+    bool first = grid_owners_[i] != nullptr;
+    for (std::size_t j = 0; j < i && first; ++j) first = grid_owners_[j] != grid_owners_[i];
+    const operators::GridOperatorView& g = grids_[i];
+    const std::size_t cells = std::size_t(g.nf > 1 ? g.nf - 1 : 0);
+    if (first)
+      bytes += (std::size_t(g.nd) * std::size_t(g.nf) * std::size_t(g.nf) + g.padded_size() + cells * cells) *
+               sizeof(float);
+  }
+  return bytes;
 }
 
 std::size_t Program::operator_of(std::size_t instruction) const {

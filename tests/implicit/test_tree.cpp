@@ -300,31 +300,6 @@ TEST_CASE("sparse evaluation on the faces of grid leaves' boxes", "[tree]") {
   CHECK(on_face > 100);
 }
 
-TEST_CASE("vectorised and scalar grid interpolation agree bit for bit", "[tree]") {
-  // eval_grid_inside (SSE2 on x86 hosts) against eval_grid_inside_scalar (the device code),
-  // inside the box, on its faces and at its corners.
-  test::Rng rng(39);
-  const auto cap = std::make_shared<const CapsuleField>(Vec3f{0, 0, 0}, Vec3f{0.2f, 0.1f, 0.7f}, 0.25f);
-  for (const int res : {2, 3, 12, 32}) {
-    const GridField grid(*cap, Box3f{}, GridFieldOptions{res, 0});
-    const GridView v = grid.view();
-    for (int i = 0; i < 20000; ++i) {
-      Vec3f p;
-      for (int a = 0; a < 3; ++a) {
-        const int pick = rng.integer(0, 5);
-        p[a] = pick == 0   ? v.box.lo[a]
-               : pick == 1 ? v.box.hi[a]
-                           : float(rng.uniform(v.box.lo[a], v.box.hi[a]));
-      }
-      const FieldSample a = eval_grid_inside(v, p), b = eval_grid_inside_scalar(v, p);
-      REQUIRE(a.value == b.value);
-      REQUIRE(a.gradient == b.gradient);
-      const FieldSample c = eval_grid(v, p);
-      REQUIRE(c.value == a.value);
-    }
-  }
-}
-
 TEST_CASE("the host/device layout evaluator equals the sparse evaluator bit for bit", "[tree]") {
   // eval_sparse_layout is what the CUDA kernel runs per thread; on the host it must give the
   // sparse evaluator's own (vectorised) results exactly, for trees of grid leaves and every

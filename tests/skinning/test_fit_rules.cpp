@@ -13,6 +13,7 @@
 #include "isokit/skinning/pipeline.h"
 #include "isokit/skinning/procedural.h"
 #include "isokit/skinning/report.h"
+#include "isokit/skinning/skin_field.h"
 #include "pipeline_fixture.h"
 
 using namespace isokit;
@@ -332,4 +333,33 @@ TEST_CASE("distance fields: setup keys and their errors", "[skinning][fit][dista
                     Catch::Contains("s.json.fit.distance.overlap_sink") && Catch::Contains("[0, 1]"));
   CHECK_THROWS_WITH(setup_from_json(R"({"fit": {"distance": {"rings": 2}}})", "s.json"),
                     Catch::Contains("s.json.fit.distance.rings") && Catch::Contains("unknown key"));
+}
+
+TEST_CASE("grid storage: the setup key, the paper preset's float32, and what a fitted rig's grids use",
+          "[skinning][fit]") {
+  using isokit::implicit::GridStorage;
+  CHECK(SkinSetup{}.fit.grid_storage == GridStorage::fixed16);
+  CHECK(setup_from_json(R"({"fit": {"grid_storage": "float32"}})", "s.json").fit.grid_storage ==
+        GridStorage::float32);
+  CHECK(setup_from_json(R"({"preset": "paper"})", "s.json").fit.grid_storage == GridStorage::float32);
+  CHECK_THROWS_WITH(setup_from_json(R"({"fit": {"grid_storage": "half"}})", "s.json"),
+                    Catch::Contains("s.json.fit.grid_storage") && Catch::Contains("\"fixed16\""));
+  // Every grid leaf of the fitted field takes the setup's storage; fixed16 halves the leaves.
+  const Rig rig = make_cylinder();
+  std::size_t bytes[2] = {0, 0};
+  for (const GridStorage storage : {GridStorage::fixed16, GridStorage::float32}) {
+    SkinSetup s;
+    s.fit.grid_storage = storage;
+    Skinner sk(rig, s);
+    const isokit::implicit::Program& p = sk.field(TreeKind::k2013).program();
+    int grids = 0;
+    for (const auto& leaf : p.leaves()) {
+      if (!leaf.grid.valid()) continue;
+      ++grids;
+      CHECK((leaf.grid.packed != nullptr) == (storage == GridStorage::fixed16));
+      bytes[storage == GridStorage::fixed16 ? 0 : 1] += leaf.grid.node_bytes();
+    }
+    CHECK(grids > 0);
+  }
+  CHECK(bytes[0] * 2 == bytes[1]);
 }

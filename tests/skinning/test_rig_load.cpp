@@ -385,8 +385,14 @@ TEST_CASE("rig_load: units and axes: a rig scaled by 2^-10 and 2^10 and a z-up c
     // Known limit: the 2014 tracker turns the float rounding of the z-up copy's joint frames
     // (a 90° quaternion is not exact in float) into differences of ~1e-4 – 1e-3 in its continuous
     // metrics (counts stay identical; 1.1e-3 in the largest edge distortion since the smoothed
-    // vertices are re-projected); scaled copies are exact.
-    const double tolerance = method == Method::kTracking2014 && c.scale == 1.0 ? 2e-3 : 1e-6;
+    // vertices are re-projected). The same rounding moves a fixed16 grid node across a rounding
+    // boundary now and then: one step, 1/32767 of the field, so ~3e-5 in implicit2013's metrics.
+    // Scaled copies are exact (a power of two scales the nodes and their scale alike).
+    const bool rotated = c.scale == 1.0;
+    const double tolerance = !rotated                          ? 1e-6
+                             : method == Method::kTracking2014 ? 2e-3
+                             : method == Method::kImplicit2013 ? 1e-4
+                                                               : 1e-6;
     check_same_skinning(expected, skinner.bake(method, bend(copy)), c.scale * c.scale * c.scale, tolerance);
   }
 }

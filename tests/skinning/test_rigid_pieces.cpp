@@ -292,10 +292,11 @@ TEST_CASE(
   const BakeResult trk = pieced.bake(Method::kTracking2014, sc.poses, sc.quick);
   sc.check_block_rigid(trk);
   // The field now holds the forearm out of the block, once the contact stages let it: without the
-  // angle and fold contacts and the contact smoothing, few forearm vertices end inside (7 when
-  // measured, against 28 under DQS; the skin folds around the block then); with them (the
-  // defaults) the vertices turned against the block's gradient are taken for contacts and left
-  // inside (36 when measured).
+  // angle and fold contacts and the contact smoothing, fewer forearm vertices end inside (13 when
+  // measured with the default fixed16 grids, 7 with float32 ones — the tracker turns the grids'
+  // 1.5e-5 quantisation into that —, against 28 under DQS; the skin folds around the block then);
+  // with them (the defaults) the vertices turned against the block's gradient are taken for
+  // contacts and left inside (37 when measured).
   SkinSetup bare_tracker = with;
   bare_tracker.tracker.angle_contacts = false;
   bare_tracker.tracker.fold_contacts = false;
@@ -304,7 +305,7 @@ TEST_CASE(
   const BakeResult dqs = plain.bake(Method::kDqs, sc.poses, sc.quick);
   INFO("inside at 90 degrees: dqs " << sc.inside(dqs.frames[10]) << ", defaults " << sc.inside(trk.frames[10])
                                     << ", without the contact stages " << sc.inside(held.frames[10]));
-  CHECK(sc.inside(held.frames[10]) * 3 <= sc.inside(dqs.frames[10]));
+  CHECK(sc.inside(held.frames[10]) * 2 <= sc.inside(dqs.frames[10]));
   sc.check_block_rigid(held);
 }
 

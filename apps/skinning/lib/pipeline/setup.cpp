@@ -254,7 +254,7 @@ void read_fit(const json& f, const std::string& w, implicit::PartFitOptions& fit
               double& max_fit_error) {
   check_keys(f,
              {"samples", "cull_h", "grid_resolution", "seed", "grid", "opening_offset", "closure",
-              "cap_height", "capsule_match", "max_error", "field", "distance"},
+              "cap_height", "capsule_match", "max_error", "field", "distance", "grid_storage"},
              w);
   if (f.contains("field")) {
     const json& k = f.at("field");
@@ -266,6 +266,13 @@ void read_fit(const json& f, const std::string& w, implicit::PartFitOptions& fit
                             : implicit::PartFitOptions::FieldKind::distance;
   }
   if (f.contains("distance")) read_distance_fit(f.at("distance"), w + ".distance", fit.distance);
+  if (f.contains("grid_storage")) {
+    const json& k = f.at("grid_storage");
+    require(k.is_string() && (k == "fixed16" || k == "float32"), w + ".grid_storage",
+            "must be \"fixed16\" or \"float32\" (got " + k.dump() + ")",
+            "use \"fixed16\" (the default: half the memory) or \"float32\" (the reference)");
+    fit.grid_storage = k == "fixed16" ? implicit::GridStorage::fixed16 : implicit::GridStorage::float32;
+  }
   read(f, "capsule_match", capsule_match, w);
   require(std::isfinite(capsule_match) && capsule_match >= 0 && capsule_match <= 10, w + ".capsule_match",
           "must be in [0, 10] (got " + format_number(capsule_match) + ")",
@@ -652,6 +659,7 @@ void read_substeps(const json& p, const std::string& w, SubstepOptions& substeps
 void apply_paper_preset(SkinSetup& s) {
   s.fit.field = implicit::PartFitOptions::FieldKind::hrbf;
   s.fit.closure = implicit::PartFitOptions::Closure::joints;
+  s.fit.grid_storage = implicit::GridStorage::float32;  // 2013 §6's float textures
   s.max_fit_error = 0;
   s.capsule_match = 0;
   track::TrackerOptions& t = s.tracker;

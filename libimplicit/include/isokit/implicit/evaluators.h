@@ -18,10 +18,17 @@
 ///   between would pass its non-zero operand through unchanged (`compose_node`'s pass-through
 ///   rule), so the result is the recursive evaluation's bit for bit. Grid operators are read
 ///   from a copy padded with their ghost nodes (`GridOperatorView::padded`), with the same
-///   results.
+///   results. Work skipped, none of it changing a result: a leaf that repeats an earlier one
+///   (`Pose::leaf_copies`) takes its sample; a grid leaf is not read where its cell's brick
+///   stores only zeros (`grid_cell_occupied`); a run of max nodes composes its operands in
+///   decreasing order of an upper bound (a leaf's value, a grid operator's bound table over two
+///   leaves: `Program::grid_bounds`) and stops when the next bound is below the best value.
 /// - `BatchEvaluator`: many points, serially; sparse programs in blocks of points (the leaves
 ///   of every point of a block first, then the compositions back to back), others through the
-///   instruction loop. For a parallel loop, one batch evaluator per task.
+///   instruction loop. For a parallel loop, one batch evaluator per task. A block tests only
+///   the leaves whose world box meets the block's box (`BatchOptions::cull`; points in mesh
+///   order lie close together). That changes no result: every point gets the bits it gets
+///   alone.
 ///
 /// \note Field convention: values in [0, 1], inside > 0.5, gradients inward, compact support.
 #pragma once
@@ -62,20 +69,42 @@ class SparseEvaluator {
 
   FieldSample eval(const Vec3f& p) const;
   /// The leaves that are non-zero at `p` (bit k: leaf k), their samples written to `samples[k]`
-  /// (`Program::kSparseMaxLeaves` entries; the others are left alone).
-  LeafMask eval_leaves(const Vec3f& p, FieldSample* samples) const;
+  /// (`Program::kSparseMaxLeaves` entries; the others are left alone). Only the leaves in
+  /// `candidates` are tested: the caller guarantees `p` lies outside the others' test boxes
+  /// (e.g. outside their `Pose::leaf_boxes`).
+  LeafMask eval_leaves(const Vec3f& p, FieldSample* samples, LeafMask candidates = ~LeafMask(0)) const;
   /// The root's value from the non-zero leaves `leaves` (two bits or more) and their samples.
   FieldSample compose(LeafMask leaves, const FieldSample* samples) const;
 
  private:
+  /// eval_leaves in two steps: `locate` writes `p` in every distinct candidate leaf's frame to
+  /// `q` (3 rows of `Program::frame_stride` floats) and returns the leaves whose local box
+  /// contains it; `eval_located` evaluates them (not where a grid's brick is empty) and
+  /// returns the non-zero leaves, copies included.
+  LeafMask locate(const Vec3f& p, float* q, LeafMask candidates) const;
+  LeafMask eval_located(LeafMask inside, const float* q, FieldSample* samples) const;
+  /// `compose` at a max node: its run of max nodes' operands, the ones that may win.
+  FieldSample compose_max(LeafMask leaves, const FieldSample* samples) const;
+  /// An upper bound of `compose(leaves)` (infinite where none is known).
+  float upper_bound(LeafMask leaves, const FieldSample* samples) const;
+
   const Program& program_;
   const Pose& pose_;
+  LeafMask distinct_{0};  ///< the leaves that repeat no earlier leaf (Pose::distinct_leaves)
+};
+
+/// How a batch evaluator does its work (results do not depend on it).
+struct BatchOptions {
+  /// Per block of 32 consecutive points, test only the leaves whose world box
+  /// (`Pose::leaf_boxes`) meets the block's box. Default true (not in the papers; measured in
+  /// docs/performance.md, "Field evaluation at memory speed").
+  bool cull = true;
 };
 
 class BatchEvaluator {
  public:
   /// \throw InputError if `pose` was not made for `program`.
-  BatchEvaluator(const Program& program, const Pose& pose);
+  BatchEvaluator(const Program& program, const Pose& pose, const BatchOptions& options = {});
 
   /// `out[i]` = the field at `points[i]`, `i < n`.
   void eval(const Vec3f* points, std::size_t n, FieldSample* out);
@@ -85,9 +114,12 @@ class BatchEvaluator {
  private:
   static constexpr std::size_t kBlock = 32;  ///< points per block (sparse programs)
   void eval_block(const Vec3f* points, std::size_t count, FieldSample* out);
+  /// The leaves whose world box meets the box of `points` (all leaves without culling).
+  LeafMask block_candidates(const Vec3f* points, std::size_t count) const;
 
   const Program& program_;
   const Pose& pose_;
+  BatchOptions options_;
   ScalarEvaluator scalar_;
   std::vector<FieldSample> samples_;  ///< kBlock rows of (leaves + 1) samples
   std::vector<FieldSample> block_;    ///< kBlock results (split outputs)

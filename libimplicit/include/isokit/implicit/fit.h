@@ -124,7 +124,10 @@ struct PartFitOptions {
   double support_margin = 1.0;
   bool sample_grid = true;   ///< also sample the field into a grid (2013 §6: 32³ textures)
   int grid_resolution = 32;  ///< grid nodes per axis, in [2, GridField::kMaxResolution] (2013 §6: 32)
-  HrbfOptions hrbf{};        ///< the HRBF fit's options (hrbf.h)
+  /// How every grid of the fit stores its nodes (grid_field.h): fixed16 (default, not in the
+  /// papers: half the memory, error bounded by `GridField::quantisation_bound`) or float32.
+  GridStorage grid_storage = GridStorage::fixed16;
+  HrbfOptions hrbf{};  ///< the HRBF fit's options (hrbf.h)
   /// The kind of field a part gets:
   /// - `hrbf` (default; 2013 §4.1): an HRBF through ~`target_samples` Poisson-disk samples;
   /// - `distance` (not in the papers): the signed distance to the part's own closed surface

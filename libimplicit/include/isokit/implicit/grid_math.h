@@ -9,6 +9,9 @@
 /// inward, 0 outside the grid's box.
 #pragma once
 
+#include <cstddef>
+#include <cstdint>
+
 #include "isokit/core/hostdev.h"
 #include "isokit/core/math.h"
 #include "isokit/implicit/field_math.h"
@@ -23,13 +26,55 @@
 namespace isokit::implicit {
 
 /// Read-only view of a sampled grid: `n^3` nodes spanning `box`, node (i, j, k) at
-/// `box.lo + (i, j, k) * (box.hi - box.lo) / (n - 1)`, stored as 4 floats
-/// (value, gx, gy, gz) at `nodes[4 * ((k * n + j) * n + i)]` (x fastest).
+/// `box.lo + (i, j, k) * (box.hi - box.lo) / (n - 1)`, with 4 channels (value, gx, gy, gz) per
+/// node at element `4 * ((k * n + j) * n + i)` (x fastest), in one of two storages:
+/// - float32: `nodes`, 16 bytes per node;
+/// - fixed16: `packed`, 8 bytes per node; a channel's value is its int16 times `scale[channel]`
+///   (GridField quantises with one scale for the value and one shared by the three gradient
+///   components, so the gradient's error does not depend on its direction).
+/// Exactly one of `nodes` and `packed` is set in a valid view. Interpolation is linear, so the
+/// fixed16 form interpolates the integers and scales the four sums once.
 struct GridView {
+  /// Cells per side of an occupancy brick (see `occupied`).
+  static constexpr int kBrick = 4;
+
   const float* nodes{nullptr};
   int n{0};
   Box3f box{};
+  const std::int16_t* packed{nullptr};
+  float scale[4]{0.f, 0.f, 0.f, 0.f};
+  /// Optional: one bit per brick of kBrick³ cells (`bricks` per axis, x fastest), clear when
+  /// every node of the brick's cells stores the value 0 — a point in such a cell evaluates to
+  /// the value 0 exactly (`grid_cell_occupied`). Null: not known.
+  const std::uint64_t* occupied{nullptr};
+  int bricks{0};
+
+  ISOKIT_HOSTDEV bool valid() const { return nodes != nullptr || packed != nullptr; }
+  /// Bytes of node data: 16 (float32) or 8 (fixed16) per node.
+  ISOKIT_HOSTDEV std::size_t node_bytes() const {
+    const std::size_t count = std::size_t(n) * std::size_t(n) * std::size_t(n);
+    return count * (packed ? 4 * sizeof(std::int16_t) : 4 * sizeof(float));
+  }
 };
+
+/// False when the cell `eval_grid_inside` reads for `p` (in the box) has only nodes of value 0,
+/// so that its value there is exactly 0 (its gradient need not be); true when it may not be or
+/// the grid has no occupancy bits. The cell is found with `eval_grid_inside_scalar`'s arithmetic.
+ISOKIT_HOSTDEV inline bool grid_cell_occupied(const GridView& g, const Vec3f& p) {
+  if (!g.occupied) return true;
+  const float q[3] = {p.x, p.y, p.z}, lo[3] = {g.box.lo.x, g.box.lo.y, g.box.lo.z},
+              hi[3] = {g.box.hi.x, g.box.hi.y, g.box.hi.z};
+  long brick = 0, stride = 1;
+  for (int a = 0; a < 3; ++a) {
+    const float s = (q[a] - lo[a]) / (hi[a] - lo[a]) * float(g.n - 1);
+    int c = int(s);
+    c = c > 0 ? c : 0;
+    c = c > g.n - 2 ? g.n - 2 : c;
+    brick += stride * (c / GridView::kBrick);
+    stride *= g.bricks;
+  }
+  return (g.occupied[brick >> 6] >> (brick & 63)) & 1u;
+}
 
 /// `eval_grid` for a point in the box (`g.box.contains(p)`); defined below.
 ISOKIT_HOSTDEV inline FieldSample eval_grid_inside(const GridView& g, const Vec3f& p);
@@ -69,20 +114,41 @@ ISOKIT_HOSTDEV inline FieldSample eval_grid_inside_scalar(const GridView& g, con
   const float wxy[4] = {omf[0] * omf[1], f[0] * omf[1], omf[0] * f[1], f[0] * f[1]};
   const float wz[2] = {omf[2], f[2]};
   const long sy = 4L * g.n, sz = sy * g.n;
-  const float* base = g.nodes + (ci[2] * sz + ci[1] * sy + 4L * ci[0]);
+  const long first = ci[2] * sz + ci[1] * sy + 4L * ci[0];
   const long offset[8] = {0, 4, sy, sy + 4, sz, sz + 4, sz + sy, sz + sy + 4};
   float acc[4] = {0.f, 0.f, 0.f, 0.f};
+  if (g.packed) {
+    for (int corner = 0; corner < 8; ++corner) {
+      const float w = wxy[corner & 3] * wz[corner >> 2];
+      const std::int16_t* node = g.packed + first + offset[corner];
+      for (int c = 0; c < 4; ++c) acc[c] += w * float(node[c]);
+    }
+    return {acc[0] * g.scale[0], {acc[1] * g.scale[1], acc[2] * g.scale[2], acc[3] * g.scale[3]}};
+  }
   for (int corner = 0; corner < 8; ++corner) {
     const float w = wxy[corner & 3] * wz[corner >> 2];
-    const float* node = base + offset[corner];
+    const float* node = g.nodes + first + offset[corner];
     for (int c = 0; c < 4; ++c) acc[c] += w * node[c];
   }
   return {acc[0], {acc[1], acc[2], acc[3]}};
 }
 
+#if defined(ISOKIT_FIELD_MATH_SSE2)
+namespace grid_detail {
+
+/// Four int16 channels (the low 8 bytes of `x`, `high` false; the high 8 bytes, true) as floats.
+inline __m128 widen(__m128i x, bool high) {
+  const __m128i z = _mm_setzero_si128();
+  const __m128i wide = high ? _mm_unpackhi_epi16(z, x) : _mm_unpacklo_epi16(z, x);
+  return _mm_cvtepi32_ps(_mm_srai_epi32(wide, 16));  // sign-extended: int16 << 16 >> 16
+}
+
+}  // namespace grid_detail
+#endif
+
 ISOKIT_HOSTDEV inline FieldSample eval_grid_inside(const GridView& g, const Vec3f& p) {
 #if defined(ISOKIT_FIELD_MATH_SSE2)
-  // eval_grid_inside_scalar with x, y, z (and the four node floats) in the lanes of a register.
+  // eval_grid_inside_scalar with x, y, z (and the four node channels) in the lanes of a register.
   const __m128 lo = _mm_setr_ps(g.box.lo.x, g.box.lo.y, g.box.lo.z, 0.f);
   const __m128 hi = _mm_setr_ps(g.box.hi.x, g.box.hi.y, g.box.hi.z, 1.f);
   const __m128 s = _mm_mul_ps(_mm_div_ps(_mm_sub_ps(_mm_setr_ps(p.x, p.y, p.z, 0.f), lo), _mm_sub_ps(hi, lo)),
@@ -101,19 +167,32 @@ ISOKIT_HOSTDEV inline FieldSample eval_grid_inside(const GridView& g, const Vec3
   const int cx = _mm_cvtsi128_si32(c), cy = _mm_cvtsi128_si32(_mm_shuffle_epi32(c, 0x55)),
             cz = _mm_cvtsi128_si32(_mm_shuffle_epi32(c, 0xaa));
   const long sy = 4L * g.n, sz = sy * g.n;
-  const float* b0 = g.nodes + (cz * sz + cy * sy + 4L * cx);
-  const float* b1 = b0 + sz;
+  const long first = cz * sz + cy * sy + 4L * cx;
+  // Corner order 0..7 as the scalar code: (x, x+1) of row (y, z), (y+1, z), (y, z+1), (y+1, z+1).
+  const long row[4] = {0, sy, sz, sz + sy};
+  const __m128 wl[4] = {_mm_shuffle_ps(w0, w0, 0x00), _mm_shuffle_ps(w0, w0, 0xaa),
+                        _mm_shuffle_ps(w1, w1, 0x00), _mm_shuffle_ps(w1, w1, 0xaa)};
+  const __m128 wr[4] = {_mm_shuffle_ps(w0, w0, 0x55), _mm_shuffle_ps(w0, w0, 0xff),
+                        _mm_shuffle_ps(w1, w1, 0x55), _mm_shuffle_ps(w1, w1, 0xff)};
   __m128 sum = _mm_setzero_ps();
-  sum = _mm_add_ps(sum, _mm_mul_ps(_mm_shuffle_ps(w0, w0, 0x00), _mm_loadu_ps(b0)));
-  sum = _mm_add_ps(sum, _mm_mul_ps(_mm_shuffle_ps(w0, w0, 0x55), _mm_loadu_ps(b0 + 4)));
-  sum = _mm_add_ps(sum, _mm_mul_ps(_mm_shuffle_ps(w0, w0, 0xaa), _mm_loadu_ps(b0 + sy)));
-  sum = _mm_add_ps(sum, _mm_mul_ps(_mm_shuffle_ps(w0, w0, 0xff), _mm_loadu_ps(b0 + sy + 4)));
-  sum = _mm_add_ps(sum, _mm_mul_ps(_mm_shuffle_ps(w1, w1, 0x00), _mm_loadu_ps(b1)));
-  sum = _mm_add_ps(sum, _mm_mul_ps(_mm_shuffle_ps(w1, w1, 0x55), _mm_loadu_ps(b1 + 4)));
-  sum = _mm_add_ps(sum, _mm_mul_ps(_mm_shuffle_ps(w1, w1, 0xaa), _mm_loadu_ps(b1 + sy)));
-  sum = _mm_add_ps(sum, _mm_mul_ps(_mm_shuffle_ps(w1, w1, 0xff), _mm_loadu_ps(b1 + sy + 4)));
   alignas(16) float acc[4];
-  _mm_store_ps(acc, sum);
+  if (g.packed) {
+    // Two x-neighbours' eight int16 in one load.
+    const std::int16_t* b = g.packed + first;
+    for (int r = 0; r < 4; ++r) {
+      const __m128i pair = _mm_loadu_si128(reinterpret_cast<const __m128i*>(b + row[r]));
+      sum = _mm_add_ps(sum, _mm_mul_ps(wl[r], grid_detail::widen(pair, false)));
+      sum = _mm_add_ps(sum, _mm_mul_ps(wr[r], grid_detail::widen(pair, true)));
+    }
+    _mm_store_ps(acc, _mm_mul_ps(sum, _mm_loadu_ps(g.scale)));
+  } else {
+    const float* b = g.nodes + first;
+    for (int r = 0; r < 4; ++r) {
+      sum = _mm_add_ps(sum, _mm_mul_ps(wl[r], _mm_loadu_ps(b + row[r])));
+      sum = _mm_add_ps(sum, _mm_mul_ps(wr[r], _mm_loadu_ps(b + row[r] + 4)));
+    }
+    _mm_store_ps(acc, sum);
+  }
   return {acc[0], {acc[1], acc[2], acc[3]}};
 #else
   return eval_grid_inside_scalar(g, p);

@@ -66,11 +66,23 @@ class Pose {
   /// Sparse programs: per leaf, in rows of `frame_stride` floats, R (9 rows, row-major), t (3)
   /// and the local test box lo (3), hi (3); padding leaves have an empty box.
   const std::vector<float>& frames() const { return frames_; }
+  /// Sparse programs: per leaf, in rows of `frame_stride` floats, its world box lo (3), hi (3),
+  /// grown past the frame test's rounding: a point outside it is outside the leaf's local test
+  /// box (what the batch evaluator's per-block cull relies on); padding leaves are empty.
+  const std::vector<float>& leaf_boxes() const { return leaf_boxes_; }
+  /// Sparse programs: leaves that repeat an earlier leaf — the same field with the same
+  /// transform and scale (a 2013 tree holds a bone once per pair it is in) — are evaluated once.
+  /// `leaf_copies()[2 k]`, `[2 k + 1]`: the low and high words of the mask of the later leaves
+  /// that repeat leaf k (0 for a leaf that repeats another); `distinct_leaves()`: the mask, in
+  /// the same two words, of the leaves that repeat none.
+  const std::vector<std::uint64_t>& leaf_copies() const { return leaf_copies_; }
+  const std::uint64_t* distinct_leaves() const { return distinct_; }
 
  private:
   void require_fits(const Program& program) const;
   void update(const Program& program);
   void update_frames(const Program& program);
+  void update_copies(const Program& program);
 
   void place(TapeLeaf& leaf, std::size_t index, const Rigid3f& xf, const Vec3f& scale);
   std::vector<TapeLeaf> leaves_;
@@ -78,6 +90,9 @@ class Pose {
   std::vector<operators::ControllerTable> controllers_;
   std::vector<Box3f> boxes_;
   std::vector<float> frames_;
+  std::vector<float> leaf_boxes_;
+  std::vector<std::uint64_t> leaf_copies_;
+  std::uint64_t distinct_[2]{0, 0};
 };
 
 /// The sparse evaluator's records of a program at a pose, as flat arrays (what a device copy

@@ -54,6 +54,10 @@ class Program {
   /// The box the sparse evaluator tests a leaf's local point against: the grid's box for a grid
   /// leaf (the one `eval_grid` tests), else the field's support.
   Box3f leaf_test_box(std::size_t leaf) const;
+  /// Bytes of sampled data an evaluation reads: the leaves' grids (each field once) and the grid
+  /// operators (their samples and the padded copy, each operator once). HRBF and analytic
+  /// leaves, a few kilobytes each, are not counted.
+  std::size_t memory_bytes() const;
   /// Most values on the stack during an evaluation.
   int max_stack() const { return max_stack_; }
 
@@ -80,6 +84,13 @@ class Program {
   /// `sparse_nodes()`) above leaves a and b.
   const std::vector<std::uint8_t>& lca() const { return lca_; }
   const std::vector<TapeSparseNode>& sparse_nodes() const { return sparse_nodes_; }
+  /// Per operator (indexed by `TapeInstr::op`), for grid operators: an upper bound of the
+  /// operator's value over each cell of its (f1, f2) grid, whatever `d` —
+  /// `bounds[i1 * (nf - 1) + i2]` for the cell `GridOperatorView::locate` gives; null for other
+  /// kinds. The bicubic interpolant stays below the cell's largest sample plus 0.28125 times
+  /// its samples' range (the Catmull-Rom weights' negative mass in 2D), plus a margin for the
+  /// float rounding. The sparse evaluator skips operands of a max that cannot win with it.
+  const std::vector<const float*>& grid_bounds() const { return grid_bounds_; }
 
  private:
   void compile(const CompositionTree& tree);
@@ -96,6 +107,8 @@ class Program {
   std::vector<operators::GridOperatorView> grids_;
   std::vector<std::shared_ptr<const operators::GridOperator>> grid_owners_;
   std::vector<std::shared_ptr<const std::vector<float>>> padded_grids_;  ///< GridOperatorView::padded
+  std::vector<std::shared_ptr<const std::vector<float>>> bound_tables_;  ///< grid_bounds() storage
+  std::vector<const float*> grid_bounds_;
   int max_stack_{0};
   bool sparse_{false};
   std::size_t frame_stride_{0};

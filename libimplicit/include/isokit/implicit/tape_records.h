@@ -15,7 +15,7 @@
 namespace isokit::implicit {
 
 /// A leaf: which field, where. Grid leaves carry their plain `GridView` and are evaluated
-/// inline (`grid.nodes != nullptr`); other fields go through `Field::eval`.
+/// inline (`grid.valid()`); other fields go through `Field::eval`.
 struct TapeLeaf {
   Rigid3f local_to_world{};
   std::int32_t field{-1};

@@ -71,7 +71,7 @@ struct GridOperatorView {
 
   /// Cell `i` (in [0, nf - 2]) and position `t` in it of `f`, clamped to [0, 1].
   ISOKIT_HOSTDEV void locate(float f, int& i, float& t) const {
-    f = f < 0.f ? 0.f : (f > 1.f ? 1.f : f);
+    f = f > 0.f ? (f < 1.f ? f : 1.f) : 0.f;  // NaN: 0 (never an index out of the grid)
     const float x = f * float(nf - 1);
     i = int(x);
     i = i > nf - 2 ? nf - 2 : i;
@@ -106,7 +106,7 @@ struct GridOperatorView {
  private:
   ISOKIT_HOSTDEV void locate_d(float d, int& k, float& w) const {
     if (nd == 1) return;
-    d = d < 0.f ? 0.f : (d > 1.f ? 1.f : d);
+    d = d > 0.f ? (d < 1.f ? d : 1.f) : 0.f;  // NaN: 0
     const float z = d * float(nd - 1);
     k = int(z);
     k = k > nd - 2 ? nd - 2 : k;

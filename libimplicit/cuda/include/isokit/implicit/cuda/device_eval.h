@@ -21,7 +21,8 @@ const char* device_description();
 /// Evaluates `n` host points on the device (copies in and out).
 void eval_sphere(const SphereParamsT<float>& s, const Vec3f* points, std::size_t n, FieldSample* out);
 void eval_capsule(const CapsuleParamsT<float>& c, const Vec3f* points, std::size_t n, FieldSample* out);
-/// `grid.nodes` is a host pointer (`4 n^3` floats); it is uploaded for the call.
+/// `grid.nodes` or `grid.packed` is a host pointer (`4 n^3` floats or int16); it is uploaded for
+/// the call.
 void eval_grid(const GridView& grid, const Vec3f* points, std::size_t n, FieldSample* out);
 
 }  // namespace isokit::implicit::cuda
