@@ -184,9 +184,11 @@ LeafMask SparseEvaluator::eval_located(LeafMask inside, const float* q, FieldSam
     inside &= inside - 1;
     const TapeLeaf& l = leaves[std::size_t(k)];
     const Vec3f local{q[std::size_t(k)], q[m + std::size_t(k)], q[2 * m + std::size_t(k)]};
-    if (l.grid.valid() && !grid_cell_occupied(l.grid, local)) continue;  // its value is 0 there
-    FieldSample s =
-        l.grid.valid() ? eval_grid_inside(l.grid, local) : program_.field(std::size_t(l.field)).eval(local);
+    FieldSample s;
+    if (!l.grid.valid())
+      s = program_.field(std::size_t(l.field)).eval(local);
+    else if (!eval_grid_inside_occupied(l.grid, local, s))
+      continue;  // an empty brick: its value is 0 there
     s.gradient = l.local_to_world.rotate(s.gradient);
     samples[k] = s;  // read only when non-zero
     if (s.value == 0.f) continue;
@@ -206,7 +208,8 @@ FieldSample SparseEvaluator::compose(LeafMask leaves, const FieldSample* samples
   const std::size_t count = pose_.leaves().size();
   const TapeSparseNode& node =
       program_.sparse_nodes()[program_.lca()[std::size_t(a) * count + std::size_t(b)]];
-  if (node.kind == OpKind::Max) return compose_max(leaves, samples);
+  if (node.kind == OpKind::Max)
+    return compose_max(leaves, samples, program_.lca()[std::size_t(a) * count + std::size_t(b)]);
   const LeafMask first = leaves & ((LeafMask(1) << node.mid) - 1), second = leaves & ~first;
   const FieldSample fa = (first & (first - 1)) ? compose(first, samples) : samples[a];
   const FieldSample fb = (second & (second - 1)) ? compose(second, samples) : samples[b];
@@ -224,69 +227,60 @@ struct MaxOperand {
 
 }  // namespace
 
-float SparseEvaluator::upper_bound(LeafMask leaves, const FieldSample* samples) const {
-  // A single leaf's value; a grid operator over two single leaves: its cell's bound
-  // (Program::grid_bounds); anything else: no bound.
-  if (!(leaves & (leaves - 1))) return samples[lowest_bit(leaves)].value;
-  const int a = lowest_bit(leaves), b = highest_bit(leaves);
-  const std::size_t count = pose_.leaves().size();
-  const TapeSparseNode& node =
-      program_.sparse_nodes()[program_.lca()[std::size_t(a) * count + std::size_t(b)]];
-  const float* table = program_.grid_bounds()[std::size_t(node.op)];
-  const LeafMask first = leaves & ((LeafMask(1) << node.mid) - 1);
-  if (node.kind != OpKind::Grid || !table || (first & (first - 1)) ||
-      ((leaves & ~first) & ((leaves & ~first) - 1)))
-    return INFINITY;
-  const operators::GridOperatorView& g = program_.grids()[std::size_t(node.op)];
-  int i1 = 0, i2 = 0;
-  float t = 0.f;
-  g.locate(samples[a].value, i1, t);
-  g.locate(samples[b].value, i2, t);
-  return table[std::size_t(i1) * std::size_t(g.nf - 1) + std::size_t(i2)];
-}
-
-FieldSample SparseEvaluator::compose_max(LeafMask leaves, const FieldSample* samples) const {
-  // The operands of the run of max nodes below the lowest common ancestor (itself a max), left
-  // to right; the result is the leftmost non-zero operand of the largest value (max keeps its
-  // first operand on a tie, and every node passes a zero operand over), else 0. Operands are composed in
-  // decreasing order of their upper bounds, until the next bound is below the best value found: none of the
-  // rest can reach it.
+FieldSample SparseEvaluator::compose_max(LeafMask leaves, const FieldSample* samples,
+                                         std::size_t node) const {
+  // The operands of the run of max nodes below `node` (Program::max_operands), left to right,
+  // that hold some of `leaves`; the result is the leftmost non-zero operand of the largest value
+  // (max keeps its first operand on a tie, and every node passes a zero operand over), else 0.
+  // An operand's upper bound: a single leaf's value; a grid operator over two leaves, both
+  // present: its cell's bound (Program::grid_bounds); else none.
   MaxOperand operands[Program::kSparseMaxLeaves + 1];
   int count = 0;
-  LeafMask stack[Program::kSparseMaxLeaves + 1];
-  int top = 0;
-  stack[top++] = leaves;
-  const std::size_t L = pose_.leaves().size();
-  while (top > 0) {
-    const LeafMask m = stack[--top];
-    if (m & (m - 1)) {
-      const int a = lowest_bit(m), b = highest_bit(m);
-      const TapeSparseNode& node =
-          program_.sparse_nodes()[program_.lca()[std::size_t(a) * L + std::size_t(b)]];
-      if (node.kind == OpKind::Max) {
-        const LeafMask first = m & ((LeafMask(1) << node.mid) - 1);
-        stack[top++] = m & ~first;  // taken after the first
-        stack[top++] = first;
-        continue;
-      }
+  const std::vector<MaxRunOperand>& run = program_.max_operands();
+  const std::int32_t begin = program_.max_run_begin()[node], end = program_.max_run_begin()[node + 1];
+  for (std::int32_t r = begin; r < end; ++r) {
+    const MaxRunOperand& o = run[std::size_t(r)];
+    const LeafMask m = leaves & (LeafMask(o.leaves[0]) | LeafMask(o.leaves[1]) << 64);
+    if (!m) continue;
+    float bound = INFINITY;
+    if (o.grid_pair_op >= 0 && (m & (m - 1))) {
+      const operators::GridOperatorView& g = program_.grids()[std::size_t(o.grid_pair_op)];
+      int i1 = 0, i2 = 0;
+      float t = 0.f;
+      g.locate(samples[o.first_leaf].value, i1, t);
+      g.locate(samples[o.first_leaf + 1].value, i2, t);
+      bound = program_.grid_bounds()[std::size_t(o.grid_pair_op)]
+                                    [std::size_t(i1) * std::size_t(g.nf - 1) + std::size_t(i2)];
     }
-    operands[count++] = MaxOperand{m, upper_bound(m, samples)};
+    operands[count++] = MaxOperand{m, bound};
   }
+  // Single leaves first (their values are known): the best of them. Then the compositions, in
+  // decreasing order of bound (an insertion sort: a run has a few dozen operands at most).
   FieldSample best;
   int best_index = -1;
-  for (int done = 0; done < count; ++done) {
-    int next = -1;
-    for (int i = 0; i < count; ++i)
-      if (operands[i].leaves && (next < 0 || operands[i].bound > operands[next].bound)) next = i;
-    if (best_index >= 0 && operands[next].bound < best.value) break;
-    const LeafMask m = operands[next].leaves;
-    operands[next].leaves = 0;  // taken
-    const FieldSample s = (m & (m - 1)) ? compose(m, samples) : samples[lowest_bit(m)];
-    if (s.value == 0.f) continue;  // passed over by the max nodes above it (compose_node's rule)
-    if (best_index < 0 || s.value > best.value || (s.value == best.value && next < best_index)) {
+  auto offer = [&](const FieldSample& s, int index) {
+    if (s.value == 0.f) return;  // passed over by the max nodes above it (compose_node's rule)
+    if (best_index < 0 || s.value > best.value || (s.value == best.value && index < best_index)) {
       best = s;
-      best_index = next;
+      best_index = index;
     }
+  };
+  int order[Program::kSparseMaxLeaves + 1];
+  int composed = 0;
+  for (int i = 0; i < count; ++i) {
+    const LeafMask m = operands[i].leaves;
+    if (!(m & (m - 1))) {
+      offer(samples[lowest_bit(m)], i);
+      continue;
+    }
+    int j = composed++;
+    for (; j > 0 && operands[order[j - 1]].bound < operands[i].bound; --j) order[j] = order[j - 1];
+    order[j] = i;
+  }
+  for (int j = 0; j < composed; ++j) {
+    const MaxOperand& o = operands[order[j]];
+    if (best_index >= 0 && o.bound < best.value) break;  // neither this one nor any after it wins
+    offer(compose(o.leaves, samples), order[j]);
   }
   return best_index < 0 ? FieldSample{} : best;
 }

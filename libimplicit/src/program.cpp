@@ -135,15 +135,16 @@ void Program::build_sparse() {
   if (!sparse_) return;
   // Post-order pass: the leaf range of every node, and the lowest common ancestor of every pair
   // of leaves (the node where the first leaf is under its first child, the second under its
-  // second child).
+  // second child); each node's children (a sparse node index, or -1 - leaf for a leaf).
   struct Item {
-    std::int32_t lo, hi;
+    std::int32_t lo, hi, node;
   };
   std::vector<Item> st;
+  std::vector<std::int32_t> first_child, second_child, range_lo, range_hi;
   lca_.assign(L * L, 0);
   for (const TapeInstr& in : instr_) {
     if (in.leaf >= 0) {
-      st.push_back({in.leaf, in.leaf + 1});
+      st.push_back({in.leaf, in.leaf + 1, -1 - in.leaf});
       continue;
     }
     const Item b = st.back();
@@ -155,9 +156,58 @@ void Program::build_sparse() {
       for (std::int32_t j = b.lo; j < b.hi; ++j)
         lca_[std::size_t(i) * L + std::size_t(j)] = std::uint8_t(self);
     sparse_nodes_.push_back(TapeSparseNode{in.kind, in.op, b.lo});
-    st.push_back({a.lo, b.hi});
+    first_child.push_back(a.node);
+    second_child.push_back(b.node);
+    range_lo.push_back(a.lo);
+    range_hi.push_back(b.hi);
+    st.push_back({a.lo, b.hi, std::int32_t(self)});
   }
   frame_stride_ = (L + 3) / 4 * 4;
+  build_max_runs(first_child, second_child, range_lo, range_hi);
+}
+
+void Program::build_max_runs(const std::vector<std::int32_t>& first_child,
+                             const std::vector<std::int32_t>& second_child,
+                             const std::vector<std::int32_t>& range_lo,
+                             const std::vector<std::int32_t>& range_hi) {
+  // For every max node, its run's operands left to right (a depth-first walk through max
+  // children); an operand's leaves are a contiguous range of the post-order.
+  const std::size_t count = sparse_nodes_.size();
+  max_run_begin_.assign(count + 1, 0);
+  auto operand = [&](std::int32_t child) {
+    MaxRunOperand o;
+    const bool leaf = child < 0;
+    o.first_leaf = leaf ? -1 - child : range_lo[std::size_t(child)];
+    o.leaf_count = leaf ? 1 : range_hi[std::size_t(child)] - range_lo[std::size_t(child)];
+    for (std::int32_t k = o.first_leaf; k < o.first_leaf + o.leaf_count; ++k)
+      o.leaves[k / 64] |= std::uint64_t(1) << (k % 64);
+    if (!leaf && sparse_nodes_[std::size_t(child)].kind == OpKind::Grid && o.leaf_count == 2 &&
+        first_child[std::size_t(child)] < 0 && second_child[std::size_t(child)] < 0)
+      o.grid_pair_op = sparse_nodes_[std::size_t(child)].op;
+    return o;
+  };
+  for (std::size_t node = 0; node < count; ++node) {
+    max_run_begin_[node] = std::int32_t(max_operands_.size());
+    if (sparse_nodes_[node].kind != OpKind::Max) continue;
+    // Steps: open a max node (its children, first child next), or emit an operand.
+    struct Step {
+      std::int32_t child;
+      bool open;
+    };
+    std::vector<Step> todo{{std::int32_t(node), true}};
+    while (!todo.empty()) {
+      const Step step = todo.back();
+      todo.pop_back();
+      if (!step.open) {
+        max_operands_.push_back(operand(step.child));
+        continue;
+      }
+      const auto m = std::size_t(step.child);
+      for (const std::int32_t child : {second_child[m], first_child[m]})
+        todo.push_back({child, child >= 0 && sparse_nodes_[std::size_t(child)].kind == OpKind::Max});
+    }
+  }
+  max_run_begin_[count] = std::int32_t(max_operands_.size());
 }
 
 Box3f Program::leaf_test_box(std::size_t leaf) const {

@@ -157,7 +157,12 @@ TEST_CASE("a grid's empty bricks hold the value 0 exactly, in both storages", "[
         const Vec3f p = random_in(rng, wide);
         const FieldSample s = eval_grid_inside(v, p);
         nonzero += s.value != 0.f;
-        if (grid_cell_occupied(v, p)) continue;
+        // The evaluator's fused test-and-interpolate agrees with both.
+        FieldSample fused;
+        const bool occupied = eval_grid_inside_occupied(v, p, fused);
+        REQUIRE(occupied == grid_cell_occupied(v, p));
+        if (occupied) require_same(fused, s);
+        if (occupied) continue;
         ++empty;
         REQUIRE(s.value == 0.f);
       }

@@ -83,10 +83,9 @@ class SparseEvaluator {
   /// returns the non-zero leaves, copies included.
   LeafMask locate(const Vec3f& p, float* q, LeafMask candidates) const;
   LeafMask eval_located(LeafMask inside, const float* q, FieldSample* samples) const;
-  /// `compose` at a max node: its run of max nodes' operands, the ones that may win.
-  FieldSample compose_max(LeafMask leaves, const FieldSample* samples) const;
-  /// An upper bound of `compose(leaves)` (infinite where none is known).
-  float upper_bound(LeafMask leaves, const FieldSample* samples) const;
+  /// `compose` at max node `node` (an index into `Program::sparse_nodes`): its run of max
+  /// nodes' operands, the ones that may win.
+  FieldSample compose_max(LeafMask leaves, const FieldSample* samples, std::size_t node) const;
 
   const Program& program_;
   const Pose& pose_;

@@ -146,8 +146,14 @@ inline __m128 widen(__m128i x, bool high) {
 }  // namespace grid_detail
 #endif
 
-ISOKIT_HOSTDEV inline FieldSample eval_grid_inside(const GridView& g, const Vec3f& p) {
 #if defined(ISOKIT_FIELD_MATH_SSE2)
+namespace grid_detail {
+
+/// eval_grid_inside_scalar with x, y, z (and the four node channels) in the lanes of a register,
+/// written to `out`. With `kSkipEmpty`, returns false without reading a node when the cell's
+/// brick is empty (`grid_cell_occupied`: the value there is 0).
+template <bool kSkipEmpty>
+inline bool eval_cell(const GridView& g, const Vec3f& p, FieldSample& out) {
   // eval_grid_inside_scalar with x, y, z (and the four node channels) in the lanes of a register.
   const __m128 lo = _mm_setr_ps(g.box.lo.x, g.box.lo.y, g.box.lo.z, 0.f);
   const __m128 hi = _mm_setr_ps(g.box.hi.x, g.box.hi.y, g.box.hi.z, 1.f);
@@ -166,6 +172,11 @@ ISOKIT_HOSTDEV inline FieldSample eval_grid_inside(const GridView& g, const Vec3
                w1 = _mm_mul_ps(wxy, _mm_shuffle_ps(f, f, 0xaa));
   const int cx = _mm_cvtsi128_si32(c), cy = _mm_cvtsi128_si32(_mm_shuffle_epi32(c, 0x55)),
             cz = _mm_cvtsi128_si32(_mm_shuffle_epi32(c, 0xaa));
+  if (kSkipEmpty && g.occupied) {
+    const long brick =
+        (long(cz / GridView::kBrick) * g.bricks + cy / GridView::kBrick) * g.bricks + cx / GridView::kBrick;
+    if (!((g.occupied[brick >> 6] >> (brick & 63)) & 1u)) return false;
+  }
   const long sy = 4L * g.n, sz = sy * g.n;
   const long first = cz * sz + cy * sy + 4L * cx;
   // Corner order 0..7 as the scalar code: (x, x+1) of row (y, z), (y+1, z), (y, z+1), (y+1, z+1).
@@ -193,9 +204,32 @@ ISOKIT_HOSTDEV inline FieldSample eval_grid_inside(const GridView& g, const Vec3
     }
     _mm_store_ps(acc, sum);
   }
-  return {acc[0], {acc[1], acc[2], acc[3]}};
+  out = {acc[0], {acc[1], acc[2], acc[3]}};
+  return true;
+}
+
+}  // namespace grid_detail
+#endif
+
+ISOKIT_HOSTDEV inline FieldSample eval_grid_inside(const GridView& g, const Vec3f& p) {
+#if defined(ISOKIT_FIELD_MATH_SSE2)
+  FieldSample out;
+  grid_detail::eval_cell<false>(g, p, out);
+  return out;
 #else
   return eval_grid_inside_scalar(g, p);
+#endif
+}
+
+/// `eval_grid_inside` where the cell's brick may hold a non-zero value (`grid_cell_occupied`):
+/// false, `out` untouched, where it holds only zeros.
+ISOKIT_HOSTDEV inline bool eval_grid_inside_occupied(const GridView& g, const Vec3f& p, FieldSample& out) {
+#if defined(ISOKIT_FIELD_MATH_SSE2)
+  return grid_detail::eval_cell<true>(g, p, out);
+#else
+  if (!grid_cell_occupied(g, p)) return false;
+  out = eval_grid_inside_scalar(g, p);
+  return true;
 #endif
 }
 

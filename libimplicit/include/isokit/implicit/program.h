@@ -24,6 +24,16 @@
 
 namespace isokit::implicit {
 
+/// An operand of a run of max nodes (Program::max_operands): a leaf, or a node of another kind,
+/// with its leaves (a range, in post-order) as a two-word mask.
+struct MaxRunOperand {
+  std::uint64_t leaves[2]{0, 0};  ///< bit k: leaf k (low word leaves 0..63)
+  std::int32_t first_leaf{0};
+  std::int32_t leaf_count{1};
+  /// A grid operator node over two leaves (its value has a bound table: Program::grid_bounds).
+  std::int32_t grid_pair_op{-1};  ///< its `TapeSparseNode::op`, else -1
+};
+
 /// One instruction (post-order): a leaf, or an inner node combining the two values on top of
 /// the stack.
 struct TapeInstr {
@@ -91,6 +101,11 @@ class Program {
   /// its samples' range (the Catmull-Rom weights' negative mass in 2D), plus a margin for the
   /// float rounding. The sparse evaluator skips operands of a max that cannot win with it.
   const std::vector<const float*>& grid_bounds() const { return grid_bounds_; }
+  /// Sparse programs: for each sparse node that is a max, the operands of the run of max nodes
+  /// below it (reached through max children), left to right: `max_operands()[i]` for i in
+  /// `[max_run_begin()[node], max_run_begin()[node + 1])`; an empty range for other nodes.
+  const std::vector<MaxRunOperand>& max_operands() const { return max_operands_; }
+  const std::vector<std::int32_t>& max_run_begin() const { return max_run_begin_; }
 
  private:
   void compile(const CompositionTree& tree);
@@ -114,6 +129,11 @@ class Program {
   std::size_t frame_stride_{0};
   std::vector<std::uint8_t> lca_;
   std::vector<TapeSparseNode> sparse_nodes_;
+  std::vector<MaxRunOperand> max_operands_;
+  std::vector<std::int32_t> max_run_begin_;
+  void build_max_runs(const std::vector<std::int32_t>& first_child,
+                      const std::vector<std::int32_t>& second_child,
+                      const std::vector<std::int32_t>& range_lo, const std::vector<std::int32_t>& range_hi);
 };
 
 }  // namespace isokit::implicit
