@@ -143,7 +143,6 @@ FieldSample ScalarEvaluator::eval(const Vec3f& p, NodeDiagnostics* diag, bool pr
 // SparseEvaluator
 
 SparseEvaluator::SparseEvaluator(const Program& program, const Pose& pose) : program_(program), pose_(pose) {
-  distinct_ = LeafMask(pose.distinct_leaves()[0]) | LeafMask(pose.distinct_leaves()[1]) << 64;
   // Made once per point by ProgramField::eval: no message is built unless it fails.
   if (!program.sparse())
     require(false, "program", "is not evaluated sparsely (2 to 127 leaves and a root node are needed)",
@@ -160,38 +159,45 @@ FieldSample SparseEvaluator::eval(const Vec3f& p) const {
   return compose(leaves, samples);
 }
 
-LeafMask SparseEvaluator::eval_leaves(const Vec3f& p, FieldSample* samples, LeafMask candidates) const {
-  alignas(16) float q[3 * ((Program::kSparseMaxLeaves + 3) / 4 * 4)];  // 3 rows of frame_stride
+LeafMask SparseEvaluator::eval_leaves(const Vec3f& p, FieldSample* samples) const {
+  return eval_slots(p, samples, ~LeafMask(0));
+}
+
+LeafMask SparseEvaluator::eval_slots(const Vec3f& p, FieldSample* samples, LeafMask candidates) const {
+  alignas(16) float q[3 * ((Program::kSparseMaxLeaves + 3) / 4 * 4)];  // 3 rows of distinct_stride
   return eval_located(locate(p, q, candidates), q, samples);
 }
 
 LeafMask SparseEvaluator::locate(const Vec3f& p, float* q, LeafMask candidates) const {
-  // The point in every distinct candidate leaf's frame, and which leaves' local boxes contain it.
-  return local_points(pose_.frames().data(), program_.frame_stride(), p, q, candidates & distinct_);
+  // The point in every candidate slot's frame (the distinct leaves: Pose::distinct_frames), and
+  // which slots' local boxes contain it.
+  return local_points(pose_.distinct_frames().data(), pose_.distinct_stride(), p, q, candidates);
 }
 
 LeafMask SparseEvaluator::eval_located(LeafMask inside, const float* q, FieldSample* samples) const {
-  // Only the leaves containing the point are evaluated, and only the ones with a non-zero value
-  // are kept (a leaf with value 0 is passed over by every node above it, whatever its gradient,
-  // as by compose_node). A non-zero sample is copied to the leaves that repeat its leaf
-  // (Pose::leaf_copies).
-  const std::size_t m = program_.frame_stride();
+  // `inside`: slots. Only the leaves containing the point are evaluated, and only the ones with
+  // a non-zero value are kept (a leaf with value 0 is passed over by every node above it,
+  // whatever its gradient, as by compose_node). A non-zero sample is copied to the leaves that
+  // repeat its leaf (Pose::leaf_copies). Returns leaves.
+  const std::size_t d = pose_.distinct_stride();
   const std::vector<TapeLeaf>& leaves = pose_.leaves();
+  const std::int32_t* slot_leaf = pose_.distinct_leaf().data();
   const std::uint64_t* copies = pose_.leaf_copies().data();
   LeafMask nonzero = 0;
   while (inside) {
-    const int k = lowest_bit(inside);
+    const int slot = lowest_bit(inside);
     inside &= inside - 1;
-    const TapeLeaf& l = leaves[std::size_t(k)];
-    const Vec3f local{q[std::size_t(k)], q[m + std::size_t(k)], q[2 * m + std::size_t(k)]};
+    const auto k = std::size_t(slot_leaf[slot]);
+    const TapeLeaf& l = leaves[k];
+    const Vec3f local{q[std::size_t(slot)], q[d + std::size_t(slot)], q[2 * d + std::size_t(slot)]};
     FieldSample s;
     if (!l.grid.valid())
       s = program_.field(std::size_t(l.field)).eval(local);
     else if (!eval_grid_inside_occupied(l.grid, local, s))
       continue;  // an empty brick: its value is 0 there
     s.gradient = l.local_to_world.rotate(s.gradient);
-    samples[k] = s;  // read only when non-zero
     if (s.value == 0.f) continue;
+    samples[k] = s;
     LeafMask same = LeafMask(1) << k | LeafMask(copies[2 * k]) | LeafMask(copies[2 * k + 1]) << 64;
     nonzero |= same;
     for (same &= same - 1; same; same &= same - 1) samples[lowest_bit(same)] = s;
@@ -332,16 +338,16 @@ Box3f points_box(const Vec3f* points, std::size_t n) {
 }  // namespace
 
 LeafMask BatchEvaluator::block_candidates(const Vec3f* points, std::size_t count) const {
-  const std::size_t L = program_.leaves().size();
-  if (!options_.cull) return (LeafMask(1) << L) - 1;
+  // Slots (Pose::distinct_leaf) whose world box meets the box of the points.
+  const std::size_t d = pose_.distinct_stride();
+  if (!options_.cull) return ~LeafMask(0);
   const Box3f b = points_box(points, count);
-  const std::size_t m = program_.frame_stride();
-  const float* boxes = pose_.leaf_boxes().data();
+  const float* boxes = pose_.distinct_boxes().data();
   LeafMask mask = 0;
-  for (std::size_t k = 0; k < L; ++k) {
+  for (std::size_t k = 0; k < d; ++k) {
     bool meets = true;
     for (std::size_t c = 0; c < 3; ++c)
-      meets = meets & (boxes[c * m + k] <= b.hi[int(c)]) & (boxes[(3 + c) * m + k] >= b.lo[int(c)]);
+      meets = meets & (boxes[c * d + k] <= b.hi[int(c)]) & (boxes[(3 + c) * d + k] >= b.lo[int(c)]);
     mask |= LeafMask(meets) << k;
   }
   return mask;
@@ -357,7 +363,7 @@ void BatchEvaluator::eval_block(const Vec3f* points, std::size_t count, FieldSam
   std::uint32_t pending[kBlock];
   const LeafMask candidates = block_candidates(points, count);
   for (std::size_t j = 0; j < count; ++j)
-    masks[j] = candidates ? sparse.eval_leaves(points[j], samples_.data() + j * row, candidates) : 0;
+    masks[j] = candidates ? sparse.eval_slots(points[j], samples_.data() + j * row, candidates) : 0;
   std::size_t np = 0;
   for (std::size_t j = 0; j < count; ++j) {
     const LeafMask leaves = masks[j];

@@ -142,6 +142,30 @@ void Pose::update_copies(const Program& program) {
     else
       leaf_copies_[2 * first + k / 64] |= std::uint64_t(1) << (k % 64);
   }
+  gather_distinct(program.frame_stride());
+}
+
+void Pose::gather_distinct(std::size_t m) {
+  const std::size_t L = leaves_.size();
+  std::vector<std::int32_t> slots;
+  for (std::size_t k = 0; k < L; ++k)
+    if ((distinct_[k / 64] >> (k % 64)) & 1u) slots.push_back(std::int32_t(k));
+  const std::size_t d = (slots.size() + 3) / 4 * 4;
+  slots.resize(d, -1);
+  distinct_leaf_ = slots;
+  distinct_frames_.assign(18 * d, 0.f);
+  distinct_boxes_.assign(6 * d, 0.f);
+  for (std::size_t slot = 0; slot < d; ++slot) {
+    const std::int32_t k = slots[slot];
+    for (std::size_t row = 0; row < 18; ++row)
+      distinct_frames_[row * d + slot] = k >= 0 ? frames_[row * m + std::size_t(k)]
+                                                : (row < 12   ? 0.f
+                                                   : row < 15 ? INFINITY
+                                                              : -INFINITY);
+    for (std::size_t row = 0; row < 6; ++row)
+      distinct_boxes_[row * d + slot] =
+          k >= 0 ? leaf_boxes_[row * m + std::size_t(k)] : (row < 3 ? INFINITY : -INFINITY);
+  }
 }
 
 void Pose::update_frames(const Program& program) {

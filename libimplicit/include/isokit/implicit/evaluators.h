@@ -69,18 +69,20 @@ class SparseEvaluator {
 
   FieldSample eval(const Vec3f& p) const;
   /// The leaves that are non-zero at `p` (bit k: leaf k), their samples written to `samples[k]`
-  /// (`Program::kSparseMaxLeaves` entries; the others are left alone). Only the leaves in
-  /// `candidates` are tested: the caller guarantees `p` lies outside the others' test boxes
-  /// (e.g. outside their `Pose::leaf_boxes`).
-  LeafMask eval_leaves(const Vec3f& p, FieldSample* samples, LeafMask candidates = ~LeafMask(0)) const;
+  /// (`Program::kSparseMaxLeaves` entries; the others are left alone).
+  LeafMask eval_leaves(const Vec3f& p, FieldSample* samples) const;
+  /// The same, testing only the distinct leaves' slots (`Pose::distinct_leaf`) in `candidates`:
+  /// the caller guarantees `p` lies outside the others' test boxes (e.g. outside their
+  /// `Pose::distinct_boxes`).
+  LeafMask eval_slots(const Vec3f& p, FieldSample* samples, LeafMask candidates) const;
   /// The root's value from the non-zero leaves `leaves` (two bits or more) and their samples.
   FieldSample compose(LeafMask leaves, const FieldSample* samples) const;
 
  private:
-  /// eval_leaves in two steps: `locate` writes `p` in every distinct candidate leaf's frame to
-  /// `q` (3 rows of `Program::frame_stride` floats) and returns the leaves whose local box
-  /// contains it; `eval_located` evaluates them (not where a grid's brick is empty) and
-  /// returns the non-zero leaves, copies included.
+  /// eval_slots in two steps: `locate` writes `p` in every candidate slot's frame to `q` (3 rows
+  /// of `Pose::distinct_stride` floats) and returns the slots whose local box contains it;
+  /// `eval_located` evaluates their leaves (not where a grid's brick is empty) and returns the
+  /// non-zero leaves, copies included.
   LeafMask locate(const Vec3f& p, float* q, LeafMask candidates) const;
   LeafMask eval_located(LeafMask inside, const float* q, FieldSample* samples) const;
   /// `compose` at max node `node` (an index into `Program::sparse_nodes`): its run of max
@@ -89,13 +91,12 @@ class SparseEvaluator {
 
   const Program& program_;
   const Pose& pose_;
-  LeafMask distinct_{0};  ///< the leaves that repeat no earlier leaf (Pose::distinct_leaves)
 };
 
 /// How a batch evaluator does its work (results do not depend on it).
 struct BatchOptions {
   /// Per block of 32 consecutive points, test only the leaves whose world box
-  /// (`Pose::leaf_boxes`) meets the block's box. Default true (not in the papers; measured in
+  /// (`Pose::distinct_boxes`) meets the block's box. Default true (not in the papers; measured in
   /// docs/performance.md, "Field evaluation at memory speed").
   bool cull = true;
 };
@@ -113,7 +114,7 @@ class BatchEvaluator {
  private:
   static constexpr std::size_t kBlock = 32;  ///< points per block (sparse programs)
   void eval_block(const Vec3f* points, std::size_t count, FieldSample* out);
-  /// The leaves whose world box meets the box of `points` (all leaves without culling).
+  /// The slots whose world box meets the box of `points` (all without culling).
   LeafMask block_candidates(const Vec3f* points, std::size_t count) const;
 
   const Program& program_;

@@ -66,10 +66,6 @@ class Pose {
   /// Sparse programs: per leaf, in rows of `frame_stride` floats, R (9 rows, row-major), t (3)
   /// and the local test box lo (3), hi (3); padding leaves have an empty box.
   const std::vector<float>& frames() const { return frames_; }
-  /// Sparse programs: per leaf, in rows of `frame_stride` floats, its world box lo (3), hi (3),
-  /// grown past the frame test's rounding: a point outside it is outside the leaf's local test
-  /// box (what the batch evaluator's per-block cull relies on); padding leaves are empty.
-  const std::vector<float>& leaf_boxes() const { return leaf_boxes_; }
   /// Sparse programs: leaves that repeat an earlier leaf — the same field with the same
   /// transform and scale (a 2013 tree holds a bone once per pair it is in) — are evaluated once.
   /// `leaf_copies()[2 k]`, `[2 k + 1]`: the low and high words of the mask of the later leaves
@@ -77,12 +73,23 @@ class Pose {
   /// the same two words, of the leaves that repeat none.
   const std::vector<std::uint64_t>& leaf_copies() const { return leaf_copies_; }
   const std::uint64_t* distinct_leaves() const { return distinct_; }
+  /// Sparse programs: the distinct leaves in slots (ascending leaf order), padded to a multiple
+  /// of 4: `distinct_leaf()[slot]` (-1 for padding); their rows of `frames()` gathered into
+  /// `distinct_frames()` (18 rows of `distinct_stride()` floats; padding has an empty box); and
+  /// their world boxes `distinct_boxes()` (lo 3, hi 3 rows), grown past the frame test's
+  /// rounding, so that a point outside one is outside the leaf's local test box (what the batch
+  /// evaluator's per-block cull relies on).
+  std::size_t distinct_stride() const { return distinct_leaf_.size(); }
+  const std::vector<std::int32_t>& distinct_leaf() const { return distinct_leaf_; }
+  const std::vector<float>& distinct_frames() const { return distinct_frames_; }
+  const std::vector<float>& distinct_boxes() const { return distinct_boxes_; }
 
  private:
   void require_fits(const Program& program) const;
   void update(const Program& program);
   void update_frames(const Program& program);
   void update_copies(const Program& program);
+  void gather_distinct(std::size_t frame_stride);
 
   void place(TapeLeaf& leaf, std::size_t index, const Rigid3f& xf, const Vec3f& scale);
   std::vector<TapeLeaf> leaves_;
@@ -90,9 +97,11 @@ class Pose {
   std::vector<operators::ControllerTable> controllers_;
   std::vector<Box3f> boxes_;
   std::vector<float> frames_;
-  std::vector<float> leaf_boxes_;
+  std::vector<float> leaf_boxes_;  ///< per leaf (frame_stride columns), gathered into distinct_boxes_
   std::vector<std::uint64_t> leaf_copies_;
   std::uint64_t distinct_[2]{0, 0};
+  std::vector<std::int32_t> distinct_leaf_;
+  std::vector<float> distinct_frames_, distinct_boxes_;
 };
 
 /// The sparse evaluator's records of a program at a pose, as flat arrays (what a device copy
