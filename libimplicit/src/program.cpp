@@ -74,25 +74,33 @@ void Program::add_leaf(const FieldPtr& field, const Rigid3f& xf, int id) {
 namespace {
 
 /// Upper bounds of a grid operator's bicubic interpolant per (f1, f2) cell over every slice
-/// (Program::grid_bounds), from its padded samples.
+/// (Program::grid_bounds), from its padded samples. The 2D Catmull-Rom weight of a stencil node
+/// is positive on the inner 2 × 2 nodes and the 4 corners, negative on the 8 others, and the
+/// negative weights sum to at least -0.28125 (1D: -t (1 - t) / 2 ≥ -1/8, so 2 × 1/8 × 9/8 in
+/// 2D); with the weights summing to 1, the interpolant is at most the largest positive-weight
+/// sample plus 0.28125 times its excess over the smallest negative-weight one. Blending two
+/// slices in d keeps every node between its two samples.
 std::vector<float> grid_bound_table(const operators::GridOperatorView& g) {
   const int nf = g.nf, n = nf + 2, cells = nf - 1;
   std::vector<float> out(std::size_t(cells) * std::size_t(cells));
   for (int i1 = 0; i1 < cells; ++i1)
     for (int i2 = 0; i2 < cells; ++i2) {
-      float hi = -INFINITY, lo = INFINITY;
+      float positive = -INFINITY, negative = INFINITY;
       for (int k = 0; k < g.nd; ++k)
         for (int a = 0; a < 4; ++a)
           for (int b = 0; b < 4; ++b) {
             // Padded rows i1 .. i1 + 3 are the stencil rows i1 - 1 .. i1 + 2 of the samples.
-            const float v =
-                g.padded[(std::size_t(k) * std::size_t(n) + std::size_t(i1 + a)) * std::size_t(n) +
-                         std::size_t(i2 + b)];
-            hi = std::max(hi, v);
-            lo = std::min(lo, v);
+            const float v = g.padded[(std::size_t(k) * std::size_t(n) + std::size_t(i1 + a)) * std::size_t(n) +
+                                     std::size_t(i2 + b)];
+            const bool inner_a = a == 1 || a == 2, inner_b = b == 1 || b == 2;
+            if (inner_a == inner_b)
+              positive = std::max(positive, v);
+            else
+              negative = std::min(negative, v);
           }
+      const float excess = std::max(0.f, positive - negative);
       out[std::size_t(i1) * std::size_t(cells) + std::size_t(i2)] =
-          hi + 0.28125f * (hi - lo) + 1e-4f * (1.f + std::fabs(hi) + std::fabs(lo));
+          positive + 0.28125f * excess + 1e-4f * (1.f + std::fabs(positive) + std::fabs(negative));
     }
   return out;
 }
