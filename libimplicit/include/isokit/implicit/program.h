@@ -99,7 +99,8 @@ class Program {
   /// `bounds[i1 * (nf - 1) + i2]` for the cell `GridOperatorView::locate` gives; null for other
   /// kinds. The bicubic interpolant stays below the cell's largest sample of positive weight plus
   /// 0.28125 (the Catmull-Rom weights' negative mass in 2D) times its excess over the smallest
-  /// sample of negative weight, plus a margin for the float rounding. The sparse evaluator skips operands of a max that cannot win with it.
+  /// sample of negative weight, plus a margin for the float rounding. The sparse evaluator skips operands of
+  /// a max that cannot win with it.
   const std::vector<const float*>& grid_bounds() const { return grid_bounds_; }
   /// Sparse programs: for each sparse node that is a max, the operands of the run of max nodes
   /// below it (reached through max children), left to right: `max_operands()[i]` for i in
