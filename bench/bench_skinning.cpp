@@ -9,8 +9,8 @@
 
 #include <cmath>
 #include <map>
-#include <tuple>
 #include <memory>
+#include <tuple>
 
 #include "isokit/core/math.h"
 #include "isokit/skinning/animation.h"
@@ -100,7 +100,11 @@ void BM_SkinFrameEnergy(benchmark::State& state) {
   state.SetLabel("tracking2014 energy " + std::to_string(sk.rig().rest.rows()) + " vertices, step " +
                  std::to_string(step).substr(0, 5) + " rad");
 }
-BENCHMARK(BM_SkinFrameEnergy)->Args({13000, 50})->UseManualTime()->Unit(benchmark::kMillisecond)->Iterations(1);
+BENCHMARK(BM_SkinFrameEnergy)
+    ->Args({13000, 50})
+    ->UseManualTime()
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(1);
 
 // The 2014 paper's Table 1 protocol ("all joints are animated simultaneously"; time step =
 // radians per animation step): spine, neck, head, shoulders, elbows, wrists, fingers, hips,

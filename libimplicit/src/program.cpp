@@ -203,17 +203,17 @@ void Program::build_max_runs(const std::vector<std::int32_t>& first_child,
       std::int32_t child;
       bool open;
     };
-    std::vector<Step> todo{{std::int32_t(node), true}};
-    while (!todo.empty()) {
-      const Step step = todo.back();
-      todo.pop_back();
+    std::vector<Step> steps{{std::int32_t(node), true}};
+    while (!steps.empty()) {
+      const Step step = steps.back();
+      steps.pop_back();
       if (!step.open) {
         max_operands_.push_back(operand(step.child));
         continue;
       }
       const auto m = std::size_t(step.child);
       for (const std::int32_t child : {second_child[m], first_child[m]})
-        todo.push_back({child, child >= 0 && sparse_nodes_[std::size_t(child)].kind == OpKind::Max});
+        steps.push_back({child, child >= 0 && sparse_nodes_[std::size_t(child)].kind == OpKind::Max});
     }
   }
   max_run_begin_[count] = std::int32_t(max_operands_.size());
