@@ -9,8 +9,10 @@
 //  - BM_FieldEval/<rig>/<path>: one evaluation of the composed field at every DQS vertex position
 //    of the clip's frames, in the projector's batches; manual time = ns per point, counters: the
 //    leaves and the field's memory (MiB). Paths, A/B in one run:
-//      `fixed16`: the default (fixed16 grids, leaves culled per block of points);
-//      `float32`: the same evaluator over float32 grids (fit.grid_storage "float32");
+//      `fixed16`: fixed16 grids and grid operators (fit.grid_storage, operators.storage), leaves
+//        culled per block of points; counters: its difference from `float32` at the same points;
+//      `float32`: the same evaluator over float32 grids and grid operators;
+//      `ops32`: fixed16 grids, float32 grid operators;
 //      `plain`: fixed16 grids, no cull;
 //      `loop`: the instruction loop (ScalarEvaluator) over the default grids.
 //    Repeated leaves are evaluated once and max operands that cannot win are skipped on every
@@ -47,7 +49,8 @@ struct Case {
   Rig rig;
   std::vector<Pose> poses;
   std::unique_ptr<Skinner> isokit, paper;
-  std::unique_ptr<Skinner> float32;  ///< fit.grid_storage "float32", made on first use
+  /// By path: the Skinner of each storage pair other than `isokit`'s, made on first use.
+  std::vector<std::pair<std::string, std::unique_ptr<Skinner>>> storages;
 };
 
 Case& load_case(const std::string& file) {
@@ -110,15 +113,17 @@ void storage_error(benchmark::State& state, Case& c, SkinField& field,
                    const std::vector<std::vector<Vec3f>>& points,
                    const std::vector<std::shared_ptr<const implicit::Pose>>& poses);
 
-/// The field of the path (`float32`: the float32 fit, made on first use).
+/// The field of the path: its leaves' and operators' storage (fixed16 or float32), made on first
+/// use; `plain` and `loop` use the default setup's.
 SkinField& path_field(Case& c, const std::string& path) {
-  if (path != "float32") return c.isokit->field(TreeKind::k2013);
-  if (!c.float32) {
-    SkinSetup s;
-    s.fit.grid_storage = implicit::GridStorage::float32;
-    c.float32 = std::make_unique<Skinner>(c.rig, s);
-  }
-  return c.float32->field(TreeKind::k2013);
+  if (path != "float32" && path != "fixed16" && path != "ops32") return c.isokit->field(TreeKind::k2013);
+  for (auto& [p, skinner] : c.storages)
+    if (p == path) return skinner->field(TreeKind::k2013);
+  SkinSetup s;
+  s.fit.grid_storage = path == "float32" ? implicit::GridStorage::float32 : implicit::GridStorage::fixed16;
+  s.operator_storage = path == "fixed16" ? implicit::GridStorage::fixed16 : implicit::GridStorage::float32;
+  c.storages.emplace_back(path, std::make_unique<Skinner>(c.rig, s));
+  return c.storages.back().second->field(TreeKind::k2013);
 }
 
 void BM_FieldEval(benchmark::State& state, const std::string& file, const std::string& path) {
@@ -228,7 +233,7 @@ int main(int argc, char** argv) {
           ->Iterations(1)
           ->Repetitions(5)
           ->ReportAggregatesOnly(true);
-    for (const std::string path : {"fixed16", "float32", "plain", "loop"})
+    for (const std::string path : {"fixed16", "ops32", "float32", "plain", "loop"})
       benchmark::RegisterBenchmark(("BM_FieldEval/" + name + "/" + path).c_str(),
                                    [file, path](benchmark::State& s) { BM_FieldEval(s, file, path); })
           ->UseManualTime()

@@ -97,10 +97,12 @@ DeviceTape::DeviceTape(const Program& program, const Pose& pose) : impl_(std::ma
   d.controllers.assign(l.controllers, l.operator_count * sizeof(operators::ControllerTable));
   std::vector<operators::GridOperatorView> grids(l.grids, l.grids + l.operator_count);
   for (operators::GridOperatorView& g : grids) {
-    if (!g.data) continue;
-    const std::size_t slices = static_cast<std::size_t>(g.nd) * static_cast<std::size_t>(g.nf) * g.nf;
-    g.data = d.upload_array(g.data, slices);
+    // A program's views read their padded copy, float or packed (program.h); `data` is null.
+    if (!g.padded && !g.packed) continue;
+    g.data = nullptr;
     g.padded = d.upload_array(g.padded, g.padded_size());
+    g.packed = d.upload_array(g.packed, g.padded_size());
+    g.packed_tiles = d.upload_array(g.packed_tiles, 2 * g.packed_tile_count());
   }
   d.grids.assign(grids.data(), grids.size() * sizeof(operators::GridOperatorView));
   d.view.lca = d.lca.as<const std::uint8_t>();

@@ -15,8 +15,10 @@
 
 namespace isokit::implicit {
 
-Program::Program(const CompositionTree& tree) {
+Program::Program(const CompositionTree& tree, ProgramOptions options) : options_(options) {
   compile(tree);
+  grid_owners_.clear();
+  grid_owners_.shrink_to_fit();
   build_sparse();
 }
 
@@ -74,7 +76,8 @@ void Program::add_leaf(const FieldPtr& field, const Rigid3f& xf, int id) {
 namespace {
 
 /// Upper bounds of a grid operator's bicubic interpolant per (f1, f2) cell over every slice
-/// (Program::grid_bounds), from its padded samples. The 2D Catmull-Rom weight of a stencil node
+/// (Program::grid_bounds), from its padded samples (decoded, when packed: the bound of what is
+/// evaluated). The 2D Catmull-Rom weight of a stencil node
 /// is positive on the inner 2 × 2 nodes and the 4 corners, negative on the 8 others, and the
 /// negative weights sum to at least -0.28125 (1D: -t (1 - t) / 2 ≥ -1/8, so 2 × 1/8 × 9/8 in
 /// 2D); with the weights summing to 1, the interpolant is at most the largest positive-weight
@@ -90,9 +93,10 @@ std::vector<float> grid_bound_table(const operators::GridOperatorView& g) {
         for (int a = 0; a < 4; ++a)
           for (int b = 0; b < 4; ++b) {
             // Padded rows i1 .. i1 + 3 are the stencil rows i1 - 1 .. i1 + 2 of the samples.
-            const float v =
-                g.padded[(std::size_t(k) * std::size_t(n) + std::size_t(i1 + a)) * std::size_t(n) +
-                         std::size_t(i2 + b)];
+            const float v = g.packed ? g.unpack(k, i1 + a, i2 + b)
+                                      : g.padded[(std::size_t(k) * std::size_t(n) + std::size_t(i1 + a)) *
+                                                     std::size_t(n) +
+                                                 std::size_t(i2 + b)];
             const bool inner_a = a == 1 || a == 2, inner_b = b == 1 || b == 2;
             if (inner_a == inner_b)
               positive = std::max(positive, v);
@@ -114,19 +118,31 @@ std::int32_t Program::add_operator(const NodeOperator& op) {
   operators::GridOperatorView gv{};
   const float* bounds = nullptr;
   if (op.grid) {
-    // One padded copy per grid operator (edge-free stencils; same results), shared by the nodes
-    // that use it and by copies of the program; the same for its bound table.
+    // One padded copy per grid operator (edge-free stencils), shared by the nodes that use it and
+    // by copies of the program; the same for its bound table. The tree's samples are not kept.
     std::size_t same = 0;
-    while (same < grid_owners_.size() && grid_owners_[same] != op.grid) ++same;
+    while (same < grid_owners_.size() && grid_owners_[same] != op.grid.get()) ++same;
     if (same < grid_owners_.size()) {
       gv = grids_[same];
       bounds = grid_bounds_[same];
     } else {
-      gv = op.grid->view();
-      auto padded = std::make_shared<std::vector<float>>(gv.padded_size());
-      gv.fill_padded(padded->data());
-      gv.padded = padded->data();
-      padded_grids_.push_back(std::move(padded));
+      const operators::GridOperatorView source = op.grid->view();
+      auto padded = std::make_shared<std::vector<float>>(source.padded_size());
+      source.fill_padded(padded->data());
+      gv.nd = source.nd;
+      gv.nf = source.nf;
+      if (options_.operator_storage == GridStorage::fixed16) {
+        auto packed = std::make_shared<std::vector<std::int16_t>>(padded->size());
+        auto tiles = std::make_shared<std::vector<float>>(2 * gv.packed_tile_count());
+        gv.pack_padded(padded->data(), packed->data(), tiles->data());
+        gv.packed = packed->data();
+        gv.packed_tiles = tiles->data();
+        packed_grids_.push_back(std::move(packed));
+        padded_grids_.push_back(std::move(tiles));
+      } else {
+        gv.padded = padded->data();
+        padded_grids_.push_back(std::move(padded));
+      }
       auto table = std::make_shared<const std::vector<float>>(grid_bound_table(gv));
       bounds = table->data();
       bound_tables_.push_back(std::move(table));
@@ -134,7 +150,7 @@ std::int32_t Program::add_operator(const NodeOperator& op) {
   }
   grids_.push_back(gv);
   grid_bounds_.push_back(bounds);
-  grid_owners_.push_back(op.grid);
+  grid_owners_.push_back(op.grid.get());
   return index;
 }
 
@@ -233,15 +249,9 @@ std::size_t Program::memory_bytes() const {
     for (std::size_t j = 0; j < i && first; ++j) first = fields_[j] != fields_[i];
     if (g && first) bytes += g->bytes();
   }
-  for (std::size_t i = 0; i < grids_.size(); ++i) {
-    bool first = grid_owners_[i] != nullptr;
-    for (std::size_t j = 0; j < i && first; ++j) first = grid_owners_[j] != grid_owners_[i];
-    const operators::GridOperatorView& g = grids_[i];
-    const std::size_t cells = std::size_t(g.nf > 1 ? g.nf - 1 : 0);
-    if (first)
-      bytes += (std::size_t(g.nd) * std::size_t(g.nf) * std::size_t(g.nf) + g.padded_size() + cells * cells) *
-               sizeof(float);
-  }
+  for (const auto& p : padded_grids_) bytes += p->size() * sizeof(float);
+  for (const auto& p : packed_grids_) bytes += p->size() * sizeof(std::int16_t);
+  for (const auto& t : bound_tables_) bytes += t->size() * sizeof(float);
   return bytes;
 }
 

@@ -16,7 +16,8 @@ ProgramField::ProgramField(std::shared_ptr<const Program> program, std::shared_p
           "make the pose from the same program: Pose(program)");
 }
 
-ProgramField::ProgramField(const CompositionTree& tree) : program_(std::make_shared<const Program>(tree)) {
+ProgramField::ProgramField(const CompositionTree& tree, ProgramOptions options)
+    : program_(std::make_shared<const Program>(tree, options)) {
   pose_ = std::make_shared<const Pose>(*program_);
 }
 

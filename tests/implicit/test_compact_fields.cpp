@@ -312,7 +312,7 @@ TEST_CASE("repeated leaves are evaluated once, and a copy moved on its own is no
   CHECK(nonzero > 3000);
 }
 
-TEST_CASE("a program's memory: fixed16 leaves take half of float32's", "[implicit][compact]") {
+TEST_CASE("a program's memory: fixed16 leaves take half of float32's, fixed16 operators half", "[implicit][compact]") {
   auto make = [](GridStorage storage) {
     const auto cap = std::make_shared<const CapsuleField>(Vec3f{0, 0, 0}, Vec3f{0, 0, 1}, 0.2f);
     const auto grid = std::make_shared<const GridField>(*cap, Box3f{}, storage_options(20, storage));
@@ -327,13 +327,81 @@ TEST_CASE("a program's memory: fixed16 leaves take half of float32's", "[implici
   // 20³ nodes, and 5³ occupancy bricks in two 64-bit words.
   CHECK(f32 == 20u * 20u * 20u * 16u + 16u);
   CHECK(f16 == 20u * 20u * 20u * 8u + 16u);
-  // A grid operator counts its samples, their padded copy and its bound table.
+  // A grid operator counts its padded copy (4 or 2 bytes a sample) and its bound table; the
+  // program keeps no reference to the tree's operator.
   const auto op = sampled_blend_grid();
-  const Program with_op(
-      CompositionTree::node(NodeOperator::grid_operator(op, operators::Controller::preset("contact"), "g"),
-                            CompositionTree::leaf(std::make_shared<const SphereField>(Vec3f{0, 0, 0}, 1.f)),
-                            CompositionTree::leaf(std::make_shared<const SphereField>(Vec3f{1, 0, 0}, 1.f))));
-  CHECK(with_op.memory_bytes() == (5u * 33u * 33u + 5u * 35u * 35u + 32u * 32u) * sizeof(float));
+  const long uses = op.use_count();
+  const auto tree = CompositionTree::node(
+      NodeOperator::grid_operator(op, operators::Controller::preset("contact"), "g"),
+      CompositionTree::leaf(std::make_shared<const SphereField>(Vec3f{0, 0, 0}, 1.f)),
+      CompositionTree::leaf(std::make_shared<const SphereField>(Vec3f{1, 0, 0}, 1.f)));
+  const long tree_uses = op.use_count();
+  const Program op32(tree), op16(tree, ProgramOptions{GridStorage::fixed16});  // float32: the default
+  CHECK(op.use_count() == tree_uses);
+  CHECK(tree_uses > uses);
+  CHECK(op32.memory_bytes() == (5u * 35u * 35u + 32u * 32u) * sizeof(float));
+  // 35 padded nodes a row: 5 × 5 tiles of 8 × 8 a slice, two floats each.
+  CHECK(op16.memory_bytes() ==
+        5u * 35u * 35u * sizeof(std::int16_t) + (5u * 5u * 5u * 2u + 32u * 32u) * sizeof(float));
+  CHECK(op32.grids()[0].data == nullptr);
+  CHECK(op16.grids()[0].padded == nullptr);
+}
+
+TEST_CASE("fixed16 grid operators agree with the float operator within the stated bound",
+          "[implicit][tree][compact]") {
+  // docs/implicit.md, "Operator storage": value within 1.5625 s / 2, each partial derivative
+  // within 1.25 × 3 × (nf − 1) × s / 2, s the largest tile step.
+  const auto blend = sampled_blend_grid();
+  const auto bumpy = std::make_shared<const operators::GridOperator>(operators::sample_operator(
+      [](float f1, float f2, float d) {
+        return std::max(f1, f2) + 0.3f * d * std::sin(9.f * f1) * std::sin(7.f * f2) * f1 * f2;
+      },
+      17, 4));
+  // The skinning pipeline's 2013 blend at the paper's 128 × 128² (the operator it stores fixed16).
+  const auto blend128 =
+      std::make_shared<const operators::GridOperator>(operators::sampled_gradient_blend_2013(128, 128));
+  test::Rng rng(79);
+  for (const auto& op : {blend, bumpy, blend128}) {
+    const auto tree = CompositionTree::node(
+        NodeOperator::grid_operator(op, operators::Controller::preset("contact"), "g"),
+        CompositionTree::leaf(std::make_shared<const SphereField>(Vec3f{0, 0, 0}, 1.f)),
+        CompositionTree::leaf(std::make_shared<const SphereField>(Vec3f{0.8f, 0, 0}, 1.f)));
+    const Program p32(tree), p16(tree, ProgramOptions{GridStorage::fixed16});
+    const operators::GridOperatorView &g32 = p32.grids()[0], &g16 = p16.grids()[0];
+    REQUIRE(g16.packed != nullptr);
+    float step = 0.f;  // the largest tile step
+    for (std::size_t t = 0; t < g16.packed_tile_count(); ++t) step = std::max(step, g16.packed_tiles[2 * t + 1]);
+    float largest = 0.f;
+    for (float v : op->data()) largest = std::max(largest, std::fabs(v));
+    INFO("largest tile step " << step << ", largest sample " << largest);
+    CHECK(step < largest / 65534.f);  // the tiles are finer than one scale for the grid
+    // A few per cent above the bound's float for the float rounding of the kernel.
+    const float value_bound = 1.5625f * step / 2.f * 1.01f + 1e-6f,
+                slope_bound = 1.25f * 3.f * float(op->nf() - 1) * step / 2.f * 1.01f + 1e-5f;
+    float worst_value = 0.f, worst_slope = 0.f;
+    for (int i = 0; i < 50000; ++i) {
+      // Half the points on cell edges and grid borders, where the ghost nodes are read.
+      float f[3];
+      for (float& x : f) {
+        x = float(rng.uniform(-0.05, 1.05));
+        if (rng.integer(0, 1) == 0) x = std::round(x * float(op->nf() - 1)) / float(op->nf() - 1);
+      }
+      const operators::OpSample a = g32.eval(f[0], f[1], f[2]), b = g16.eval(f[0], f[1], f[2]);
+      REQUIRE(a.g == op->eval(f[0], f[1], f[2]).g);  // float32: the operator bit for bit
+      worst_value = std::max(worst_value, std::fabs(a.g - b.g));
+      worst_slope = std::max({worst_slope, std::fabs(a.dg1 - b.dg1), std::fabs(a.dg2 - b.dg2)});
+    }
+    CHECK(worst_value <= value_bound);
+    CHECK(worst_slope <= slope_bound);
+    CHECK(worst_value > 0.f);  // the two storages are not the same array
+    // The composed field: its value moves by no more than the operator's.
+    const Pose pose32(p32), pose16(p16);
+    ScalarEvaluator e32(p32, pose32), e16(p16, pose16);
+    for (int i = 0; i < 2000; ++i) {
+      const Vec3f x = test::to_float(rng.vec(-1.2, 2.0));
+      CHECK(std::fabs(e32.eval(x, nullptr, true).value - e16.eval(x, nullptr, true).value) <= value_bound);
+    }
+  }
 }
 
 TEST_CASE("a grid operator's bound table bounds it in every cell, whatever d", "[implicit][tree][compact]") {
@@ -345,11 +413,13 @@ TEST_CASE("a grid operator's bound table bounds it in every cell, whatever d", "
       },
       17, 4));
   test::Rng rng(78);
-  for (const auto& op : {blend, bumpy}) {
+  for (const auto& [op, storage] : {std::pair{blend, GridStorage::fixed16}, std::pair{bumpy, GridStorage::fixed16},
+                                     std::pair{blend, GridStorage::float32}, std::pair{bumpy, GridStorage::float32}}) {
     const Program p(CompositionTree::node(
-        NodeOperator::grid_operator(op, operators::Controller::preset("contact"), "g"),
-        CompositionTree::leaf(std::make_shared<const SphereField>(Vec3f{0, 0, 0}, 1.f)),
-        CompositionTree::leaf(std::make_shared<const SphereField>(Vec3f{1, 0, 0}, 1.f))));
+                        NodeOperator::grid_operator(op, operators::Controller::preset("contact"), "g"),
+                        CompositionTree::leaf(std::make_shared<const SphereField>(Vec3f{0, 0, 0}, 1.f)),
+                        CompositionTree::leaf(std::make_shared<const SphereField>(Vec3f{1, 0, 0}, 1.f))),
+                    ProgramOptions{storage});
     const operators::GridOperatorView& g = p.grids()[0];
     const float* table = p.grid_bounds()[0];
     REQUIRE(table != nullptr);

@@ -363,3 +363,37 @@ TEST_CASE("grid storage: the setup key, the paper preset's float32, and what a f
   }
   CHECK(bytes[0] * 2 == bytes[1]);
 }
+
+TEST_CASE("operator storage: auto is fixed16 for the 2013 tree and float32 for the 2014 tree",
+          "[skinning][fit]") {
+  using isokit::implicit::GridStorage;
+  CHECK(!SkinSetup{}.operator_storage.has_value());
+  CHECK(setup_from_json(R"({"operators": {"storage": "float32"}})", "s.json").operator_storage ==
+        GridStorage::float32);
+  CHECK(!setup_from_json(R"({"operators": {"storage": "auto"}})", "s.json").operator_storage.has_value());
+  CHECK(setup_from_json(R"({"preset": "paper"})", "s.json").operator_storage == GridStorage::float32);
+  CHECK_THROWS_WITH(setup_from_json(R"({"operators": {"storage": "half"}})", "s.json"),
+                    Catch::Contains("s.json.operators.storage") && Catch::Contains("\"auto\""));
+  // What each tree's program reads its grid operators from (the 2013 blend grid; the 2014
+  // tree's contact operators).
+  const Rig rig = make_cylinder();
+  auto storage_of = [&](const SkinSetup& s, TreeKind kind) {
+    Skinner sk(rig, s);
+    const isokit::implicit::Program& p = sk.field(kind).program();
+    int packed = 0, padded = 0;
+    for (const auto& g : p.grids()) {
+      packed += g.packed != nullptr;
+      padded += g.padded != nullptr;
+      CHECK(g.data == nullptr);
+    }
+    REQUIRE(packed + padded > 0);
+    return packed > 0 && padded == 0 ? GridStorage::fixed16 : GridStorage::float32;
+  };
+  SkinSetup s;
+  CHECK(storage_of(s, TreeKind::k2013) == GridStorage::fixed16);
+  CHECK(storage_of(s, TreeKind::k2014) == GridStorage::float32);
+  s.operator_storage = GridStorage::fixed16;
+  CHECK(storage_of(s, TreeKind::k2014) == GridStorage::fixed16);
+  s.operator_storage = GridStorage::float32;
+  CHECK(storage_of(s, TreeKind::k2013) == GridStorage::float32);
+}

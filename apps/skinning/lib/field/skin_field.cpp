@@ -106,7 +106,10 @@ SkinField::SkinField(const FittedRig& fitted, const SkinSetup& setup, TreeKind t
   const implicit::CompositionTree t = kind_ == TreeKind::k2013
                                           ? implicit::build_tree_2013(sk.parts, sk.joints)
                                           : implicit::build_tree_2014(sk.parts, sk.joints);
-  program_ = std::make_shared<const implicit::Program>(t);
+  // operators.storage "auto": fixed16 for the 2013 tree, float32 for the 2014 tree (setup.h).
+  const implicit::GridStorage storage = setup.operator_storage.value_or(
+      kind_ == TreeKind::k2013 ? implicit::GridStorage::fixed16 : implicit::GridStorage::float32);
+  program_ = std::make_shared<const implicit::Program>(t, implicit::ProgramOptions{storage});
   auto rest = std::make_shared<implicit::Pose>(*program_);
   pose_muscles(std::vector<Affine>(fitted.rig().joints.size(), Affine::Identity()), *rest);
   rest_ = rest;

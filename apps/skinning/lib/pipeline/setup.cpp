@@ -231,6 +231,18 @@ void read_joints(const json& js, const std::string& source, const std::string& b
   }
 }
 
+/// A storage key (`fit.grid_storage`, `operators.storage`): "fixed16" or "float32".
+/// `also`: other accepted values, named in the message.
+void read_storage(const json& o, const char* key, implicit::GridStorage& out, const std::string& w,
+                  const std::string& also = "") {
+  if (!o.contains(key)) return;
+  const json& k = o.at(key);
+  require(k.is_string() && (k == "fixed16" || k == "float32"), w + "." + key,
+          "must be " + also + "\"fixed16\" or \"float32\" (got " + k.dump() + ")",
+          "use " + also + "\"fixed16\" (half the memory) or \"float32\" (the reference)");
+  out = k == "fixed16" ? implicit::GridStorage::fixed16 : implicit::GridStorage::float32;
+}
+
 /// Section `fit.distance`: the distance field of each part (implicit::DistanceFitOptions).
 void read_distance_fit(const json& d, const std::string& w, implicit::DistanceFitOptions& o) {
   check_keys(d,
@@ -266,13 +278,7 @@ void read_fit(const json& f, const std::string& w, implicit::PartFitOptions& fit
                             : implicit::PartFitOptions::FieldKind::distance;
   }
   if (f.contains("distance")) read_distance_fit(f.at("distance"), w + ".distance", fit.distance);
-  if (f.contains("grid_storage")) {
-    const json& k = f.at("grid_storage");
-    require(k.is_string() && (k == "fixed16" || k == "float32"), w + ".grid_storage",
-            "must be \"fixed16\" or \"float32\" (got " + k.dump() + ")",
-            "use \"fixed16\" (the default: half the memory) or \"float32\" (the reference)");
-    fit.grid_storage = k == "fixed16" ? implicit::GridStorage::fixed16 : implicit::GridStorage::float32;
-  }
+  read_storage(f, "grid_storage", fit.grid_storage, w);
   read(f, "capsule_match", capsule_match, w);
   require(std::isfinite(capsule_match) && capsule_match >= 0 && capsule_match <= 10, w + ".capsule_match",
           "must be in [0, 10] (got " + format_number(capsule_match) + ")",
@@ -310,8 +316,15 @@ void read_fit(const json& f, const std::string& w, implicit::PartFitOptions& fit
 void read_operators(const json& o, const std::string& w, const std::string& base_dir, SkinSetup& s) {
   check_keys(o,
              {"resolution", "slices", "bulge_gate", "blend_grid", "contact_controller", "bulge_controller",
-              "contact_spec", "bulge_spec"},
+              "contact_spec", "bulge_spec", "storage"},
              w);
+  if (o.contains("storage") && o.at("storage") == "auto") {
+    s.operator_storage.reset();
+  } else if (o.contains("storage")) {
+    implicit::GridStorage storage{};
+    read_storage(o, "storage", storage, w, "\"auto\" (the default), ");
+    s.operator_storage = storage;
+  }
   if (o.contains("contact_spec")) s.contact_spec = read_spec_file(o, "contact_spec", w, base_dir);
   if (o.contains("bulge_spec")) s.bulge_spec = read_spec_file(o, "bulge_spec", w, base_dir);
   read(o, "resolution", s.operator_resolution, w);
@@ -660,6 +673,7 @@ void apply_paper_preset(SkinSetup& s) {
   s.fit.field = implicit::PartFitOptions::FieldKind::hrbf;
   s.fit.closure = implicit::PartFitOptions::Closure::joints;
   s.fit.grid_storage = implicit::GridStorage::float32;  // 2013 §6's float textures
+  s.operator_storage = implicit::GridStorage::float32;  // 2014 §4.2's float grids
   s.max_fit_error = 0;
   s.capsule_match = 0;
   track::TrackerOptions& t = s.tracker;

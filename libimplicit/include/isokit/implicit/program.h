@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "isokit/implicit/field.h"
+#include "isokit/implicit/grid_field.h"
 #include "isokit/implicit/node_eval.h"
 #include "isokit/implicit/tape_records.h"
 #include "isokit/implicit/tree.h"
@@ -43,6 +44,18 @@ struct TapeInstr {
   std::int32_t chain_parent{-1};  ///< parent, if this instruction is its first child; else -1
 };
 
+/// How a program is compiled.
+struct ProgramOptions {
+  /// How the program stores its grid operators' samples (one padded copy per operator, with the
+  /// ghost nodes; GridOperatorView::padded / packed). `fixed16` (not in the papers): 16 bits per
+  /// sample in 8 × 8 tiles with their own offset and step (2.1 bytes a sample), each sample within
+  /// half its tile's step (the tile's range / 65534) of the float; `float32` (default): the
+  /// floats, evaluated bit for bit as the tree's operator (the 2014 paper's 128³ float grids,
+  /// §4.2). Either way the program keeps no other copy: the tree's operators are not referenced
+  /// after the build.
+  GridStorage operator_storage = GridStorage::float32;
+};
+
 class Program {
  public:
   /// Most leaves of a sparse program (one bit per leaf in a 128-bit mask, one spare).
@@ -51,7 +64,7 @@ class Program {
   static constexpr std::size_t kLayoutMaxLeaves = 63;
 
   /// Compiles `tree`. \throw InputError if the tree is deeper than 4096.
-  explicit Program(const CompositionTree& tree);
+  explicit Program(const CompositionTree& tree, ProgramOptions options = {});
 
   std::size_t size() const { return instr_.size(); }
   const std::vector<TapeInstr>& instructions() const { return instr_; }
@@ -64,8 +77,8 @@ class Program {
   /// The box the sparse evaluator tests a leaf's local point against: the grid's box for a grid
   /// leaf (the one `eval_grid` tests), else the field's support.
   Box3f leaf_test_box(std::size_t leaf) const;
-  /// Bytes of sampled data an evaluation reads: the leaves' grids (each field once) and the grid
-  /// operators (their samples and the padded copy, each operator once). HRBF and analytic
+  /// Bytes of sampled data the program holds: the leaves' grids (each field once) and the grid
+  /// operators (the padded copy and the bound table, each operator once). HRBF and analytic
   /// leaves, a few kilobytes each, are not counted.
   std::size_t memory_bytes() const;
   /// Most values on the stack during an evaluation.
@@ -82,7 +95,8 @@ class Program {
     return controllers_[operator_of(instruction)];
   }
   /// The tree's controller tables and the grid operators (empty views for other kinds), indexed
-  /// by `TapeInstr::op`.
+  /// by `TapeInstr::op`. A grid operator's view reads the program's padded copy (`padded`, or
+  /// `packed` with fixed16 storage); its `data` is null.
   const std::vector<operators::ControllerTable>& controllers() const { return controllers_; }
   const std::vector<operators::GridOperatorView>& grids() const { return grids_; }
 
@@ -121,8 +135,12 @@ class Program {
   std::vector<FieldPtr> fields_;
   std::vector<operators::ControllerTable> controllers_;
   std::vector<operators::GridOperatorView> grids_;
-  std::vector<std::shared_ptr<const operators::GridOperator>> grid_owners_;
-  std::vector<std::shared_ptr<const std::vector<float>>> padded_grids_;  ///< GridOperatorView::padded
+  /// The tree's operator of each grid view while compiling (identity only; cleared after).
+  std::vector<const operators::GridOperator*> grid_owners_;
+  /// GridOperatorView::padded (float32), or ::packed_tiles (fixed16)
+  std::vector<std::shared_ptr<const std::vector<float>>> padded_grids_;
+  std::vector<std::shared_ptr<const std::vector<std::int16_t>>> packed_grids_;  ///< ... ::packed
+  ProgramOptions options_;
   std::vector<std::shared_ptr<const std::vector<float>>> bound_tables_;  ///< grid_bounds() storage
   std::vector<const float*> grid_bounds_;
   int max_stack_{0};

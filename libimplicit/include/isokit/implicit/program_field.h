@@ -18,8 +18,8 @@ class ProgramField final : public Field {
  public:
   /// \throw InputError if either is null or `pose` was not made for `program`.
   ProgramField(std::shared_ptr<const Program> program, std::shared_ptr<const Pose> pose);
-  /// Compiles `tree` and poses it with the tree's own transforms and controllers.
-  explicit ProgramField(const CompositionTree& tree);
+  /// Compiles `tree` (with `options`) and poses it with the tree's own transforms and controllers.
+  explicit ProgramField(const CompositionTree& tree, ProgramOptions options = {});
 
   FieldSample eval(const Vec3f& p) const override;
   Box3f support() const override { return pose_->support(); }

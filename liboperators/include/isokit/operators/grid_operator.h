@@ -15,10 +15,13 @@
 /// Evaluation reads the 4 × 4 stencil directly where it lies on the grid, through `ghost` at the
 /// edges, or from a copy padded with the ghost nodes (`GridOperatorView::padded`, no edge cases).
 /// Every path gives the same bits, and x86 hosts (SSE2) the same bits as the scalar device code
-/// (the kernel: bicubic.h).
+/// (the kernel: bicubic.h). A 16-bit copy of the padded samples in 8 × 8 tiles, each with its own
+/// offset and step (`GridOperatorView::packed`: 2.1 bytes a sample), is decoded into the stencil
+/// and evaluated by the same kernel; its samples lie within half their tile's step of the floats.
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <functional>
 #include <vector>
 
@@ -38,6 +41,17 @@ struct GridOperatorView {
   /// `padded_size`, `fill_padded`). When set, `eval` reads every stencil from it, with no edge
   /// cases; the results are the same bit for bit.
   const float* padded{nullptr};
+  /// Optional, instead of `padded`: the padded copy stored as 16-bit integers in tiles of
+  /// kPackTile × kPackTile samples of a slice, each tile with its own offset and step: sample `i`
+  /// (row r, column c of slice k of the padded copy) is `o + step * packed[i]`, with
+  /// `(o, step) = packed_tiles[2 t], packed_tiles[2 t + 1]`, `t = (k * T + r / kPackTile) * T +
+  /// c / kPackTile`, `T = packed_tiles_per_row()` (`pack_padded`). A tile's step is its samples'
+  /// range / 65534, so it is within half a step of the float. When set, `eval` reads every stencil
+  /// from it (decoded, then the same kernel) and neither `data` nor `padded` is read.
+  const std::int16_t* packed{nullptr};
+  const float* packed_tiles{nullptr};
+
+  static constexpr int kPackTile = 8;
 
   ISOKIT_HOSTDEV float node(int k, int i1, int i2) const {
     return data[(static_cast<std::size_t>(k) * nf + i1) * nf + i2];
@@ -67,6 +81,62 @@ struct GridOperatorView {
       for (int i1 = -1; i1 <= nf; ++i1)
         for (int i2 = -1; i2 <= nf; ++i2)
           out[(static_cast<std::size_t>(k) * (nf + 2) + (i1 + 1)) * (nf + 2) + (i2 + 1)] = ghost(k, i1, i2);
+  }
+
+  /// Tiles per row (and per column) of a packed slice.
+  ISOKIT_HOSTDEV int packed_tiles_per_row() const { return (nf + 2 + kPackTile - 1) / kPackTile; }
+  /// Number of tiles of the packed copy: `nd T²` (2 floats each in `packed_tiles`).
+  ISOKIT_HOSTDEV std::size_t packed_tile_count() const {
+    const std::size_t t = static_cast<std::size_t>(packed_tiles_per_row());
+    return static_cast<std::size_t>(nd) * t * t;
+  }
+  /// Quantises a padded copy (`padded_size()` floats at `padded_samples`) into `out`
+  /// (`padded_size()` int16) and `tiles` (`2 packed_tile_count()` floats): per tile, the offset
+  /// `(max + min) / 2` and the step `(max − min) / 65534` of its samples (1 for a constant tile),
+  /// each sample `round((v − offset) / step)`. Returns the largest step. Host code.
+  float pack_padded(const float* padded_samples, std::int16_t* out, float* tiles) const {
+    const int n = nf + 2, t = packed_tiles_per_row();
+    float largest = 0.f;
+    for (int k = 0; k < nd; ++k)
+      for (int tr = 0; tr < t; ++tr)
+        for (int tc = 0; tc < t; ++tc) {
+          const int r1 = tr * kPackTile + kPackTile < n ? tr * kPackTile + kPackTile : n,
+                    c1 = tc * kPackTile + kPackTile < n ? tc * kPackTile + kPackTile : n;
+          auto at = [&](int r, int c) {
+            return (static_cast<std::size_t>(k) * static_cast<std::size_t>(n) + static_cast<std::size_t>(r)) *
+                       static_cast<std::size_t>(n) +
+                   static_cast<std::size_t>(c);
+          };
+          float lo = padded_samples[at(tr * kPackTile, tc * kPackTile)], hi = lo;
+          for (int r = tr * kPackTile; r < r1; ++r)
+            for (int c = tc * kPackTile; c < c1; ++c) {
+              lo = lo < padded_samples[at(r, c)] ? lo : padded_samples[at(r, c)];
+              hi = hi > padded_samples[at(r, c)] ? hi : padded_samples[at(r, c)];
+            }
+          const float offset = 0.5f * (hi + lo), step = hi > lo ? (hi - lo) / 65534.f : 1.f;
+          const std::size_t tile = (static_cast<std::size_t>(k) * t + static_cast<std::size_t>(tr)) * t + tc;
+          tiles[2 * tile] = offset;
+          tiles[2 * tile + 1] = step;
+          if (hi > lo) largest = step > largest ? step : largest;
+          for (int r = tr * kPackTile; r < r1; ++r)
+            for (int c = tc * kPackTile; c < c1; ++c) {
+              const float q = (padded_samples[at(r, c)] - offset) / step;
+              const float rq = q < 0.f ? q - 0.5f : q + 0.5f;
+              out[at(r, c)] = static_cast<std::int16_t>(rq > 32767.f ? 32767.f : (rq < -32767.f ? -32767.f : rq));
+            }
+        }
+    return largest;
+  }
+  /// Sample (k, r, c) of the packed copy (r, c: padded row and column), decoded.
+  ISOKIT_HOSTDEV float unpack(int k, int r, int c) const {
+    const int n = nf + 2, t = packed_tiles_per_row();
+    const std::size_t tile = (static_cast<std::size_t>(k) * t + static_cast<std::size_t>(r / kPackTile)) * t +
+                             static_cast<std::size_t>(c / kPackTile);
+    const std::size_t i =
+        (static_cast<std::size_t>(k) * static_cast<std::size_t>(n) + static_cast<std::size_t>(r)) *
+            static_cast<std::size_t>(n) +
+        static_cast<std::size_t>(c);
+    return packed_tiles[2 * tile] + packed_tiles[2 * tile + 1] * float(packed[i]);
   }
 
   /// Cell `i` (in [0, nf - 2]) and position `t` in it of `f`, clamped to [0, 1].
@@ -120,6 +190,15 @@ struct GridOperatorView {
     locate(f1, i1, t1);
     locate(f2, i2, t2);
     const float s = float(nf - 1);
+    if (direct && packed) {
+      float v[32];  // slice k's stencil rows, then slice k + 1's (read only when w != 0)
+      for (int a = 0; a < 4; ++a)
+        for (int b = 0; b < 4; ++b) v[4 * a + b] = unpack(k, i1 + a, i2 + b);
+      if (w != 0.f)
+        for (int a = 0; a < 4; ++a)
+          for (int b = 0; b < 4; ++b) v[16 + 4 * a + b] = unpack(k + 1, i1 + a, i2 + b);
+      return bicubic(v, 4, 16, w, t1, t2, s);
+    }
     if (direct && padded) {
       const std::ptrdiff_t n = nf + 2;
       return bicubic(padded + (k * n + i1) * n + i2, n, n * n, w, t1, t2, s);

@@ -164,6 +164,14 @@ struct SkinSetup {
   double max_fit_error{0};
   int operator_resolution{128};  ///< grid operator resolution per axis, [8, 1024] (2014 §6.1: 128)
   int operator_slices{128};      ///< grid operator slices, [8, 1024] (2014 §6.1: 128)
+  /// How the field's program stores its grid operators (implicit::ProgramOptions): `fixed16`
+  /// (not in the papers: 16-bit samples in 8 × 8 tiles, 2.1 bytes a sample instead of 4, each
+  /// within half its tile's step of the float) or `float32` (the 2014 paper's float grids; the
+  /// `paper` preset's). Empty (the default, setup key value "auto"): fixed16 for the 2013 tree,
+  /// whose projector felt no difference on the real rigs, and float32 for the 2014 tree, whose
+  /// tracker lost 7 checks with fixed16 (docs/decisions/field-evaluation-at-memory-speed.md).
+  /// Setup key `operators.storage`.
+  std::optional<implicit::GridStorage> operator_storage;
   /// The 2013 gradient-based blend (Appendix A) sampled into a grid of `operator_resolution`² ×
   /// `operator_slices` nodes and interpolated like the grid operators (true), as the 2013 paper
   /// stores its operators in 128³ textures (§6), or evaluated analytically at every point (false:
