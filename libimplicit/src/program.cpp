@@ -93,10 +93,10 @@ std::vector<float> grid_bound_table(const operators::GridOperatorView& g) {
         for (int a = 0; a < 4; ++a)
           for (int b = 0; b < 4; ++b) {
             // Padded rows i1 .. i1 + 3 are the stencil rows i1 - 1 .. i1 + 2 of the samples.
-            const float v = g.packed ? g.unpack(k, i1 + a, i2 + b)
-                                      : g.padded[(std::size_t(k) * std::size_t(n) + std::size_t(i1 + a)) *
-                                                     std::size_t(n) +
-                                                 std::size_t(i2 + b)];
+            const float v =
+                g.packed ? g.unpack(k, i1 + a, i2 + b)
+                         : g.padded[(std::size_t(k) * std::size_t(n) + std::size_t(i1 + a)) * std::size_t(n) +
+                                    std::size_t(i2 + b)];
             const bool inner_a = a == 1 || a == 2, inner_b = b == 1 || b == 2;
             if (inner_a == inner_b)
               positive = std::max(positive, v);

@@ -312,7 +312,8 @@ TEST_CASE("repeated leaves are evaluated once, and a copy moved on its own is no
   CHECK(nonzero > 3000);
 }
 
-TEST_CASE("a program's memory: fixed16 leaves take half of float32's, fixed16 operators half", "[implicit][compact]") {
+TEST_CASE("a program's memory: fixed16 leaves take half of float32's, fixed16 operators half",
+          "[implicit][compact]") {
   auto make = [](GridStorage storage) {
     const auto cap = std::make_shared<const CapsuleField>(Vec3f{0, 0, 0}, Vec3f{0, 0, 1}, 0.2f);
     const auto grid = std::make_shared<const GridField>(*cap, Box3f{}, storage_options(20, storage));
@@ -331,10 +332,10 @@ TEST_CASE("a program's memory: fixed16 leaves take half of float32's, fixed16 op
   // program keeps no reference to the tree's operator.
   const auto op = sampled_blend_grid();
   const long uses = op.use_count();
-  const auto tree = CompositionTree::node(
-      NodeOperator::grid_operator(op, operators::Controller::preset("contact"), "g"),
-      CompositionTree::leaf(std::make_shared<const SphereField>(Vec3f{0, 0, 0}, 1.f)),
-      CompositionTree::leaf(std::make_shared<const SphereField>(Vec3f{1, 0, 0}, 1.f)));
+  const auto tree =
+      CompositionTree::node(NodeOperator::grid_operator(op, operators::Controller::preset("contact"), "g"),
+                            CompositionTree::leaf(std::make_shared<const SphereField>(Vec3f{0, 0, 0}, 1.f)),
+                            CompositionTree::leaf(std::make_shared<const SphereField>(Vec3f{1, 0, 0}, 1.f)));
   const long tree_uses = op.use_count();
   const Program op32(tree), op16(tree, ProgramOptions{GridStorage::fixed16});  // float32: the default
   CHECK(op.use_count() == tree_uses);
@@ -370,7 +371,8 @@ TEST_CASE("fixed16 grid operators agree with the float operator within the state
     const operators::GridOperatorView &g32 = p32.grids()[0], &g16 = p16.grids()[0];
     REQUIRE(g16.packed != nullptr);
     float step = 0.f;  // the largest tile step
-    for (std::size_t t = 0; t < g16.packed_tile_count(); ++t) step = std::max(step, g16.packed_tiles[2 * t + 1]);
+    for (std::size_t t = 0; t < g16.packed_tile_count(); ++t)
+      step = std::max(step, g16.packed_tiles[2 * t + 1]);
     float largest = 0.f;
     for (float v : op->data()) largest = std::max(largest, std::fabs(v));
     INFO("largest tile step " << step << ", largest sample " << largest);
@@ -413,8 +415,9 @@ TEST_CASE("a grid operator's bound table bounds it in every cell, whatever d", "
       },
       17, 4));
   test::Rng rng(78);
-  for (const auto& [op, storage] : {std::pair{blend, GridStorage::fixed16}, std::pair{bumpy, GridStorage::fixed16},
-                                     std::pair{blend, GridStorage::float32}, std::pair{bumpy, GridStorage::float32}}) {
+  for (const auto& [op, storage] :
+       {std::pair{blend, GridStorage::fixed16}, std::pair{bumpy, GridStorage::fixed16},
+        std::pair{blend, GridStorage::float32}, std::pair{bumpy, GridStorage::float32}}) {
     const Program p(CompositionTree::node(
                         NodeOperator::grid_operator(op, operators::Controller::preset("contact"), "g"),
                         CompositionTree::leaf(std::make_shared<const SphereField>(Vec3f{0, 0, 0}, 1.f)),

@@ -34,7 +34,8 @@ TEST_CASE("program evaluation equals recursive evaluation, pruning changes no re
   test::Rng rng(31);
   for (int trial = 0; trial < 8; ++trial) {
     const CompositionTree tree = random_tree(rng, rng.integer(1, 24), false);
-    const ProgramField field(tree, ProgramOptions{GridStorage::float32});  // (the default) the tree's operators bit for bit
+    const ProgramField field(
+        tree, ProgramOptions{GridStorage::float32});  // (the default) the tree's operators bit for bit
     const Program& program = field.program();
     ScalarEvaluator scalar(program, field.pose());
     CHECK(program.size() == tree.node_count());
@@ -231,7 +232,8 @@ TEST_CASE("sparse evaluation equals the reference up to 127 leaves and beyond", 
   test::Rng rng(37);
   for (const int n : {2, 5, 62, 63, 64, 65, 100, 127, 128}) {
     const CompositionTree tree = random_tree(rng, n, false);
-    const ProgramField field(tree, ProgramOptions{GridStorage::float32});  // (the default) the tree's operators bit for bit
+    const ProgramField field(
+        tree, ProgramOptions{GridStorage::float32});  // (the default) the tree's operators bit for bit
     ScalarEvaluator scalar(field.program(), field.pose());
     CHECK(field.program().sparse() == (n <= 127));
     std::vector<Vec3f> pts(4001);
@@ -281,7 +283,8 @@ TEST_CASE("sparse evaluation on the faces of grid leaves' boxes", "[tree]") {
   const CompositionTree tree = CompositionTree::node(
       NodeOperator::grid_operator(sampled_blend_grid(), ops::Controller::preset("contact"), "g"),
       CompositionTree::leaf(grid), CompositionTree::leaf(grid, turn));
-  const ProgramField field(tree, ProgramOptions{GridStorage::float32});  // (the default) the tree's operators bit for bit
+  const ProgramField field(
+      tree, ProgramOptions{GridStorage::float32});  // (the default) the tree's operators bit for bit
   const Box3f b = grid->support();
   test::Rng rng(38);
   int on_face = 0;

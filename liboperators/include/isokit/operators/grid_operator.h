@@ -122,7 +122,8 @@ struct GridOperatorView {
             for (int c = tc * kPackTile; c < c1; ++c) {
               const float q = (padded_samples[at(r, c)] - offset) / step;
               const float rq = q < 0.f ? q - 0.5f : q + 0.5f;
-              out[at(r, c)] = static_cast<std::int16_t>(rq > 32767.f ? 32767.f : (rq < -32767.f ? -32767.f : rq));
+              out[at(r, c)] =
+                  static_cast<std::int16_t>(rq > 32767.f ? 32767.f : (rq < -32767.f ? -32767.f : rq));
             }
         }
     return largest;
