@@ -137,11 +137,11 @@ std::int32_t Program::add_operator(const NodeOperator& op) {
         gv.pack_padded(padded->data(), packed->data(), tiles->data());
         gv.packed = packed->data();
         gv.packed_tiles = tiles->data();
-        packed_grids_.push_back(std::move(packed));
-        padded_grids_.push_back(std::move(tiles));
+        operator_packed_.push_back(std::move(packed));
+        operator_floats_.push_back(std::move(tiles));
       } else {
         gv.padded = padded->data();
-        padded_grids_.push_back(std::move(padded));
+        operator_floats_.push_back(std::move(padded));
       }
       auto table = std::make_shared<const std::vector<float>>(grid_bound_table(gv));
       bounds = table->data();
@@ -249,8 +249,8 @@ std::size_t Program::memory_bytes() const {
     for (std::size_t j = 0; j < i && first; ++j) first = fields_[j] != fields_[i];
     if (g && first) bytes += g->bytes();
   }
-  for (const auto& p : padded_grids_) bytes += p->size() * sizeof(float);
-  for (const auto& p : packed_grids_) bytes += p->size() * sizeof(std::int16_t);
+  for (const auto& p : operator_floats_) bytes += p->size() * sizeof(float);
+  for (const auto& p : operator_packed_) bytes += p->size() * sizeof(std::int16_t);
   for (const auto& t : bound_tables_) bytes += t->size() * sizeof(float);
   return bytes;
 }

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 #include "isokit/operators/grid_operator.h"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -18,6 +19,32 @@ GridOperator::GridOperator(int nd, int nf, std::vector<float> data)
   require(data_.size() == static_cast<std::size_t>(nd) * nf * nf, "grid operator data",
           "size " + std::to_string(data_.size()) + " does not match nd * nf * nf",
           "pass nd * nf * nf values");
+}
+
+void GridOperatorView::pack_padded(const float* padded_samples, std::int16_t* out, float* tiles) const {
+  const int n = nf + 2, t = packed_tiles_per_row();
+  for (int k = 0; k < nd; ++k)
+    for (int tr = 0; tr < t; ++tr)
+      for (int tc = 0; tc < t; ++tc) {
+        const int r0 = tr * kPackTile, c0 = tc * kPackTile;
+        const int r1 = std::min(r0 + kPackTile, n), c1 = std::min(c0 + kPackTile, n);
+        auto at = [&](int r, int c) {
+          return (std::size_t(k) * std::size_t(n) + std::size_t(r)) * std::size_t(n) + std::size_t(c);
+        };
+        float lo = padded_samples[at(r0, c0)], hi = lo;
+        for (int r = r0; r < r1; ++r)
+          for (int c = c0; c < c1; ++c)
+            lo = std::min(lo, padded_samples[at(r, c)]), hi = std::max(hi, padded_samples[at(r, c)]);
+        const float offset = 0.5f * (hi + lo), step = hi > lo ? (hi - lo) / 65534.f : 1.f;
+        const std::size_t tile =
+            (std::size_t(k) * std::size_t(t) + std::size_t(tr)) * std::size_t(t) + std::size_t(tc);
+        tiles[2 * tile] = offset;
+        tiles[2 * tile + 1] = step;
+        for (int r = r0; r < r1; ++r)
+          for (int c = c0; c < c1; ++c)
+            out[at(r, c)] = std::int16_t(
+                std::clamp(std::lround((padded_samples[at(r, c)] - offset) / step), -32767L, 32767L));
+      }
 }
 
 GridOperator sample_operator(const std::function<float(float, float, float)>& g, int nf, int nd) {

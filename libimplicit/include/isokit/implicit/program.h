@@ -137,9 +137,10 @@ class Program {
   std::vector<operators::GridOperatorView> grids_;
   /// The tree's operator of each grid view while compiling (identity only; cleared after).
   std::vector<const operators::GridOperator*> grid_owners_;
-  /// GridOperatorView::padded (float32), or ::packed_tiles (fixed16)
-  std::vector<std::shared_ptr<const std::vector<float>>> padded_grids_;
-  std::vector<std::shared_ptr<const std::vector<std::int16_t>>> packed_grids_;  ///< ... ::packed
+  /// The grid operators' copies: GridOperatorView::padded (float32), or ::packed with its
+  /// ::packed_tiles (fixed16).
+  std::vector<std::shared_ptr<const std::vector<float>>> operator_floats_;
+  std::vector<std::shared_ptr<const std::vector<std::int16_t>>> operator_packed_;
   ProgramOptions options_;
   std::vector<std::shared_ptr<const std::vector<float>>> bound_tables_;  ///< grid_bounds() storage
   std::vector<const float*> grid_bounds_;

@@ -93,41 +93,8 @@ struct GridOperatorView {
   /// Quantises a padded copy (`padded_size()` floats at `padded_samples`) into `out`
   /// (`padded_size()` int16) and `tiles` (`2 packed_tile_count()` floats): per tile, the offset
   /// `(max + min) / 2` and the step `(max − min) / 65534` of its samples (1 for a constant tile),
-  /// each sample `round((v − offset) / step)`. Returns the largest step. Host code.
-  float pack_padded(const float* padded_samples, std::int16_t* out, float* tiles) const {
-    const int n = nf + 2, t = packed_tiles_per_row();
-    float largest = 0.f;
-    for (int k = 0; k < nd; ++k)
-      for (int tr = 0; tr < t; ++tr)
-        for (int tc = 0; tc < t; ++tc) {
-          const int r1 = tr * kPackTile + kPackTile < n ? tr * kPackTile + kPackTile : n,
-                    c1 = tc * kPackTile + kPackTile < n ? tc * kPackTile + kPackTile : n;
-          auto at = [&](int r, int c) {
-            return (static_cast<std::size_t>(k) * static_cast<std::size_t>(n) + static_cast<std::size_t>(r)) *
-                       static_cast<std::size_t>(n) +
-                   static_cast<std::size_t>(c);
-          };
-          float lo = padded_samples[at(tr * kPackTile, tc * kPackTile)], hi = lo;
-          for (int r = tr * kPackTile; r < r1; ++r)
-            for (int c = tc * kPackTile; c < c1; ++c) {
-              lo = lo < padded_samples[at(r, c)] ? lo : padded_samples[at(r, c)];
-              hi = hi > padded_samples[at(r, c)] ? hi : padded_samples[at(r, c)];
-            }
-          const float offset = 0.5f * (hi + lo), step = hi > lo ? (hi - lo) / 65534.f : 1.f;
-          const std::size_t tile = (static_cast<std::size_t>(k) * t + static_cast<std::size_t>(tr)) * t + tc;
-          tiles[2 * tile] = offset;
-          tiles[2 * tile + 1] = step;
-          if (hi > lo) largest = step > largest ? step : largest;
-          for (int r = tr * kPackTile; r < r1; ++r)
-            for (int c = tc * kPackTile; c < c1; ++c) {
-              const float q = (padded_samples[at(r, c)] - offset) / step;
-              const float rq = q < 0.f ? q - 0.5f : q + 0.5f;
-              out[at(r, c)] =
-                  static_cast<std::int16_t>(rq > 32767.f ? 32767.f : (rq < -32767.f ? -32767.f : rq));
-            }
-        }
-    return largest;
-  }
+  /// each sample `round((v − offset) / step)`. Host code (grid_operator.cpp).
+  void pack_padded(const float* padded_samples, std::int16_t* out, float* tiles) const;
   /// Sample (k, r, c) of the packed copy (r, c: padded row and column), decoded.
   ISOKIT_HOSTDEV float unpack(int k, int r, int c) const {
     const int n = nf + 2, t = packed_tiles_per_row();
