@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 // The energy tracker's local step: the field at the current positions, the per-vertex ARAP
 // rotations (Sorkine & Alexa 2007), the target search and the monotone guard (energy_tracker.h).
+#include <algorithm>
 #include <cmath>
 
 #include <Eigen/Core>
@@ -14,6 +15,9 @@
 namespace isokit::track::detail {
 
 namespace {
+
+// Resets per vertex and call (see `replaces`).
+constexpr std::uint8_t kMaxResets = 2;
 
 // Rotation minimising Σj wij ‖ej − R dj‖² for S = Σj wij dj ejᵀ: R = V Uᵀ (S = U Σ Vᵀ), with the
 // sign of the singular vector of the smallest singular value flipped if that is a reflection.
@@ -31,24 +35,43 @@ Mat3d procrustes(const Eigen::Matrix3d& s) {
   return out;
 }
 
-// A candidate replaces the target if it is not farther from xi, or if there is none yet, or if
-// the old one misses its iso-value by more than iso_tolerance and the candidate by less (a reset).
+// A candidate replaces the target if there is none yet; or if it is not farther from xi by the
+// target term's distance and misses its iso-value by no more than iso_tolerance or than the old
+// target (a closer target that misses by more would let the ARAP term drag the vertex away from
+// where the search still finds its iso-value, and back: a 2-cycle); or (a reset) if the old
+// target is off — it misses its iso-value by more than iso_tolerance, or (plane targets) its plane
+// no longer locates the iso-surface near xi, the candidate lying farther beyond it than
+// iso_tolerance / |∇f(xi)| — and the candidate misses by less. Only resets can raise E, and a
+// vertex is reset at most kMaxResets times per call: where the field's gradient turns quickly
+// two targets can each make the other's plane look stale, and without a budget the vertex
+// would cycle between them.
+bool replaces(const EnergyCall& c, const TargetSet& t, const TargetSet& cand, std::size_t i, bool& reset) {
+  const EnergyData& m = c.m;
+  if (t.kind[i] == TargetKind::kNone) return true;
+  const float tol = m.options.iso_tolerance;
+  const double dn = m.target_distance2(c.x[i], cand.point[i], cand.normal[i]),
+               dold = m.target_distance2(c.x[i], t.point[i], t.normal[i]);
+  if (dn <= dold && (cand.res[i] <= tol || cand.res[i] <= t.res[i])) return true;
+  float miss = t.res[i];
+  if (m.planes() && cand.kind[i] == TargetKind::kIso && dn > dold)
+    miss = std::max(miss, float((std::sqrt(dn) - std::sqrt(dold)) * double(norm(c.grad[i]))));
+  reset = miss > tol && cand.res[i] < miss && c.reset_count[i] < kMaxResets;
+  return reset;
+}
+
 void accept_targets(EnergyCall& c, const TargetSet& cand) {
   const EnergyData& m = c.m;
-  const float tol = m.options.iso_tolerance;
   TargetSet& t = c.targets;
   std::vector<std::uint8_t> reset(m.n, 0);
   parallel_for(m.moving.size(), m.options.grain, [&](std::size_t b, std::size_t e) {
     for (std::size_t a = b; a < e; ++a) {
       const std::size_t i = std::size_t(m.moving[a]);
-      bool take = t.kind[i] == TargetKind::kNone;
-      if (!take) {
-        const double dn = squared_norm(cand.point[i] - c.x[i]), dold = squared_norm(t.point[i] - c.x[i]);
-        take = dn <= dold;
-        if (!take && t.res[i] > tol && cand.res[i] < t.res[i]) take = true, reset[i] = 1;
-      }
-      if (!take) continue;
+      bool r = false;
+      if (!replaces(c, t, cand, i, r)) continue;
+      reset[i] = r;
+      c.reset_count[i] = std::uint8_t(c.reset_count[i] + r);
       t.point[i] = cand.point[i];
+      t.normal[i] = cand.normal[i];
       t.res[i] = cand.res[i];
       t.kind[i] = cand.kind[i];
     }

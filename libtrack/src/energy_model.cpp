@@ -49,6 +49,9 @@ void validate_energy_options(const EnergyTrackerOptions& o) {
   const std::string fix = "use the default (energy_tracker.h)";
   require(std::isfinite(o.iso_weight) && o.iso_weight > 0, "EnergyTrackerOptions::iso_weight",
           "must be finite and > 0 (got " + format_number(o.iso_weight) + ")", fix + ": 10");
+  require(std::isfinite(o.tangent_weight) && o.tangent_weight > 0 && o.tangent_weight <= 1,
+          "EnergyTrackerOptions::tangent_weight",
+          "must be in (0, 1] (got " + format_number(o.tangent_weight) + ")", fix + ": 1");
   require(in_range(o.anchor_weight, 0, 1e30f), "EnergyTrackerOptions::anchor_weight",
           "must be finite and >= 0 (got " + format_number(o.anchor_weight) + ")", fix + ": 100");
   require(std::isfinite(o.max_cotangent) && o.max_cotangent > 0, "EnergyTrackerOptions::max_cotangent",
@@ -127,8 +130,7 @@ void EnergyModel::refactor() {
     }
     energy_scale += iso_w[i] + anchor_w[i] + wsum;
   }
-  system.factor(*this);
-  ++pending_factorizations;
+  pending_factorizations += system.factor(*this);
 }
 
 }  // namespace isokit::track::detail

@@ -20,7 +20,8 @@ using Mat3d = Mat3T<double>;
 struct EnergyData;
 
 /// The global step's matrix `(2 L + W + K)` over the unpinned vertices and its sparse Cholesky
-/// factor (double precision; energy_system.cpp).
+/// factor (double precision; energy_system.cpp); with plane targets (tangent_weight < 1) also the
+/// coupled `(2 L + B + K)` over their 3 coordinates and a factor of it at earlier normals.
 class EnergySystem {
  public:
   EnergySystem();
@@ -28,12 +29,23 @@ class EnergySystem {
   EnergySystem(const EnergySystem&) = delete;
   EnergySystem& operator=(const EnergySystem&) = delete;
 
-  /// Assembles and factors the matrix of `m` (its weights, Wi, Ki and unknowns).
-  /// \throw InputError if the factorisation fails (not positive definite).
-  void factor(const EnergyData& m);
+  /// Assembles and factors the matrix of `m` (its weights, Wi, Ki and unknowns); with plane
+  /// targets assembles the plane system's pattern instead (factored by solve_planes). Returns
+  /// whether it factored. \throw InputError if the factorisation fails (not positive definite).
+  bool factor(const EnergyData& m);
+  /// Marks the plane factor stale: the next solve_planes refactors.
+  void begin_call() const;
   /// Solves `(2 L + W + K) x = rhs` for the 3 coordinates: `rhs` is `unknowns by 3` (row-major),
   /// overwritten by the solution.
   void solve(double* rhs, int unknowns) const;
+  /// Plane targets: solves `(2 L + B + K) x = rhs` (`rhs` and `x`: 3 · unknowns, interleaved per
+  /// unknown) by conjugate gradients from the `x` given, preconditioned by the last factor of
+  /// this matrix; refactors it first when the last solve took more than kRefactorAfter
+  /// iterations, or when there is none. `normals` per vertex. Returns the iterations taken.
+  int solve_planes(const EnergyData& m, const std::vector<Vec3d>& normals, const std::vector<double>& rhs,
+                   std::vector<double>& x) const;
+  /// Factorisations of the plane system since the last call to this (reported with the others).
+  int take_plane_factorizations() const;
 
  private:
   struct Impl;
@@ -68,6 +80,15 @@ struct EnergyData {
   std::vector<int> reset_log;
 
   bool pinned(std::size_t i) const { return unknown[i] < 0; }
+  /// Plane targets (EnergySolveOptions::tangent_weight < 1).
+  bool planes() const { return options.tangent_weight < 1.f; }
+  /// (xi − p)ᵀ Bi (xi − p) / Wi for a target p with normal `normal` (energy_tracker.h).
+  double target_distance2(const Vec3d& xi, const Vec3d& p, const Vec3d& normal) const {
+    const Vec3d d = xi - p;
+    if (normal.x == 0 && normal.y == 0 && normal.z == 0) return squared_norm(d);  // a point target
+    const double eps = double(options.tangent_weight), dn = dot(normal, d);
+    return eps * squared_norm(d) + (1.0 - eps) * dn * dn;
+  }
 };
 
 /// The data and the factor of its matrix. A copy refactors (the factor is not shared: CHOLMOD's
@@ -77,8 +98,7 @@ struct EnergyModel : EnergyData {
 
   EnergyModel() = default;
   explicit EnergyModel(const EnergyData& data) : EnergyData(data) {
-    system.factor(*this);
-    ++pending_factorizations;
+    pending_factorizations += system.factor(*this);
   }
   /// Unknowns and Ki from `stiffness`, then a new factor.
   void refactor();
@@ -98,6 +118,7 @@ enum class TargetKind : std::uint8_t { kNone, kIso, kContact, kLost };
 /// their kinds; also the candidates of one local step.
 struct TargetSet {
   std::vector<Vec3d> point;
+  std::vector<Vec3d> normal;  // unit ∇f/|∇f| at the vertex when the target was found; 0 if none
   std::vector<float> res;
   std::vector<TargetKind> kind;
 };
@@ -113,7 +134,8 @@ struct EnergyCall {
   std::vector<float> value;  // f at x (last local step)
   std::vector<Vec3f> grad;   // ∇f at x (last local step)
   std::vector<std::uint8_t> field_contact, lost;
-  int resets{0};  // targets replaced by the bad-target rule in the last local step
+  int resets{0};                          // targets replaced by the bad-target rule in the last local step
+  std::vector<std::uint8_t> reset_count;  // per vertex: resets in this call (energy_local.cpp)
   TrackStats stats;
 };
 
@@ -125,7 +147,7 @@ void fit_rotations(EnergyCall& c);
 void search_targets(EnergyCall& c, TargetSet& out);
 /// Global step (energy_system.cpp): `next` = argmin over x of E(x, R, P) (pinned vertices at x);
 /// returns the largest |next − x|.
-double global_step(const EnergyCall& c, std::vector<Vec3d>& next);
+double global_step(EnergyCall& c, std::vector<Vec3d>& next);
 /// E(positions, R, P) summed in a fixed order (independent of the grain).
 double energy(const EnergyCall& c, const std::vector<Vec3d>& positions);
 

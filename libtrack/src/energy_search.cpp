@@ -33,6 +33,7 @@ struct LineSearch {
   int kept{0};                               // Illinois: end replaced last (−1 lo, +1 hi)
   float best_t{0}, best_r{0};                // sample of smallest |f − iso|
   float turn_lo{0}, turn_hi{0};              // crease bracket: before / after the gradient turn
+  Vec3f g_prev, g_lo, g_hi;                  // unit gradients at the last sample and the bracket's ends
   float t_next{0};
   Phase phase{Phase::kDone};
 };
@@ -54,12 +55,14 @@ bool start_search(const SearchContext& s, std::size_t i, LineSearch& ls, TargetS
   const float f = c.value[i], gn = norm(g);
   const Vec3d& x = c.x[i];
   out.point[i] = x;
+  out.normal[i] = {};
   lost = !(std::isfinite(f) && finite3(g) && std::isfinite(gn) && gn > s.min_gradient);
   if (lost) {
     out.res[i] = std::numeric_limits<float>::infinity();
     out.kind[i] = TargetKind::kLost;
     return false;
   }
+  out.normal[i] = {g.x / gn, g.y / gn, g.z / gn};
   if (c.field_contact[i]) {  // the field marks a contact: the vertex stops where it is
     out.res[i] = 0.f;
     out.kind[i] = TargetKind::kContact;
@@ -71,6 +74,7 @@ bool start_search(const SearchContext& s, std::size_t i, LineSearch& ls, TargetS
   if (std::abs(r) <= s.stop_res) return false;
   ls.origin = {float(x.x), float(x.y), float(x.z)};
   ls.dir = g / gn;
+  ls.g_prev = ls.dir;
   ls.reach = c.m.options.max_search * c.m.edge[i];
   ls.r_prev = ls.best_r = r;
   ls.t_next = std::clamp(-r / gn, -ls.reach, ls.reach);
@@ -100,9 +104,11 @@ void take_sample(const SearchContext& s, float iso, LineSearch& ls, float f, con
   const float gn = norm(g);
   if (s.angles && gn > s.min_gradient && dot(g, ls.dir) < s.cos_turn * gn) {
     ls.turn_lo = ls.t_prev, ls.turn_hi = t;
+    ls.g_lo = ls.g_prev, ls.g_hi = g / gn;
     ls.phase = Phase::kCrease;
     return;
   }
+  if (gn > s.min_gradient) ls.g_prev = g / gn;
   const float r = f - iso;
   if (std::abs(r) < std::abs(ls.best_r)) ls.best_t = t, ls.best_r = r;
   if (std::abs(r) <= s.stop_res) {
@@ -162,9 +168,20 @@ long sub_step(const SearchContext& s, std::vector<LineSearch>& ls, bool crease) 
       const float gn = norm(g);
       const bool turned = finite3(g) && gn > s.min_gradient && dot(g, l.dir) < s.cos_turn * gn;
       (turned ? l.turn_hi : l.turn_lo) = l.t_next;
+      if (gn > s.min_gradient && finite3(g)) (turned ? l.g_hi : l.g_lo) = g / gn;
     }
   });
   return long(n);
+}
+
+// The normal of the contact surface at a crease: where f = max(f1, f2) turns from ∇f1 to ∇f2 the
+// surface f1 = f2 has the normal ∇f1 − ∇f2, taken here from the unit gradients at the ends of the
+// crease bracket (the search direction when they coincide).
+Vec3d crease_normal(const LineSearch& l, const Vec3d& d) {
+  const Vec3f n = l.g_lo - l.g_hi;
+  const float len = norm(n);
+  if (!(len > 1e-3f)) return d;
+  return {n.x / len, n.y / len, n.z / len};
 }
 
 // The candidates from the finished searches: a contact's crease on the vertex's own side (where
@@ -189,6 +206,7 @@ void finish(const EnergyCall& c, const std::vector<LineSearch>& ls, TargetSet& o
                     away = before ? l.turn_lo - l.turn_hi : l.turn_hi - l.turn_lo;
         const float back = c.m.options.contact_offset * c.m.edge[i] * (away < 0.f ? -1.f : 1.f);
         out.point[i] = c.x[i] + d * double(t + back);
+        out.normal[i] = crease_normal(l, d);
         out.res[i] = 0.f;
         out.kind[i] = TargetKind::kContact;
       } else {
@@ -207,6 +225,7 @@ void search_targets(EnergyCall& c, TargetSet& out) {
   const SearchContext s{c, std::cos(o.contact_angle_deg * kPiF / 180.f), 1e-3f * o.iso_tolerance,
                         o.min_gradient, o.angle_contacts};
   out.point = c.x;
+  out.normal.assign(m.n, Vec3d{});
   out.res.assign(m.n, 0.f);
   out.kind.assign(m.n, TargetKind::kNone);
   std::vector<LineSearch> ls(m.n);

@@ -37,6 +37,7 @@ void start_call(EnergyCall& c, const Positions& positions, const Positions& anch
     c.x[i] = m.pinned(i) ? c.anchor[i] : to_double(x[i]);
   }
   c.targets.point = c.x;
+  c.targets.normal.assign(m.n, Vec3d{});
   c.targets.res.assign(m.n, std::numeric_limits<float>::infinity());
   c.targets.kind.assign(m.n, TargetKind::kNone);
   c.rot.assign(m.n, Mat3d{});
@@ -44,6 +45,8 @@ void start_call(EnergyCall& c, const Positions& positions, const Positions& anch
   c.grad.assign(m.n, Vec3f{});
   c.field_contact.assign(m.n, 0);
   c.lost.assign(m.n, 0);
+  c.reset_count.assign(m.n, 0);
+  c.m.system.begin_call();
 }
 
 std::vector<double> pack(const EnergyData& m, const std::vector<Vec3d>& x) {
@@ -163,7 +166,7 @@ void finish_call(EnergyCall& c, EnergyData& m, Positions& positions) {
   }
   s.mean_residual = count > 0 ? float(sum / count) : 0.f;
   s.vertex_updates = long(m.n) * s.iterations;
-  s.factorizations = m.pending_factorizations;
+  s.factorizations = m.pending_factorizations + c.m.system.take_plane_factorizations();
   m.pending_factorizations = 0;
 }
 

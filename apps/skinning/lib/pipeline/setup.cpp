@@ -397,6 +397,9 @@ void read_tracker_energy(const json& t, const std::string& w, track::EnergySolve
   read(t, "energy_iso_weight", e.iso_weight, w);
   require(std::isfinite(e.iso_weight) && e.iso_weight > 0.f, w + ".energy_iso_weight", "must be > 0",
           "use 10 (the default)");
+  read(t, "energy_tangent_weight", e.tangent_weight, w);
+  require(std::isfinite(e.tangent_weight) && e.tangent_weight > 0.f && e.tangent_weight <= 1.f,
+          w + ".energy_tangent_weight", "must be in (0, 1]", "use 0.01 (the default) or 1 (point targets)");
   read(t, "energy_anchor_weight", e.anchor_weight, w);
   require(std::isfinite(e.anchor_weight) && e.anchor_weight >= 0.f, w + ".energy_anchor_weight",
           "must be >= 0", "use 100 (the default)");
@@ -448,6 +451,7 @@ void check_tracker_keys(const json& t, const std::string& w) {
               "iso_tolerance",
               "global_regularization",
               "energy_iso_weight",
+              "energy_tangent_weight",
               "energy_anchor_weight",
               "energy_contact_offset",
               "energy_max_search",

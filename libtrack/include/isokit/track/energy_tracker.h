@@ -3,11 +3,17 @@
 /// An iso-surface tracker that minimises one energy by local–global iterations (Projective
 /// Dynamics, Bouaziz et al. 2014; Projective Skinning, Komaritzan & Botsch 2018):
 ///
-///   E(x, R, P) = Σi Σj∈N(i) wij ‖(xi − xj) − Ri (pi − pj)‖²  +  Σi Wi ‖xi − Pi‖²  +  Σi Ki ‖xi − ai‖²
+///   E(x, R, P, n) = Σi Σj∈N(i) wij ‖(xi − xj) − Ri (pi − pj)‖²  +  Σi (xi − Pi)ᵀ Bi (xi − Pi)  +  Σi Ki ‖xi
+///   − ai‖²
+///
+/// with Bi = Wi (ε I + (1 − ε) ni niᵀ): the target term holds vertex i on the plane through its
+/// target Pi with normal ni at full weight and along that plane at the fraction ε
+/// (`tangent_weight`; ε = 1 is a point target, Bi = Wi I).
 ///
 /// p: rest positions; wij: cotangent weights of the rest mesh (each corner's cotangent clamped to
 /// [0, max_cotangent], halved); Ri: per-vertex rotations (one-ring ARAP, Sorkine & Alexa 2007);
-/// Pi: per-vertex targets (projections onto the vertex's iso-value or onto a contact crease);
+/// Pi: per-vertex targets (projections onto the vertex's iso-value or onto a contact crease), ni
+/// the unit search direction ∇f/|∇f| at the vertex when its target was found;
 /// Wi = iso_weight · Ai / Ā and Ki = ki · anchor_weight · Ai / Ā (Ai: barycentric rest area of the
 /// vertex, Ā: its mean over the vertices with area; a vertex without area counts as Ā), ki the
 /// anchor stiffness, ai the call's anchors. Stiffness 1 pins a vertex at its anchor.
@@ -21,11 +27,18 @@
 ///    bisections of the turn) set back by `contact_offset` on its own side, where ∇f points along
 ///    the vertex's inward normal (the field's flag alone: xi itself). A candidate replaces the
 ///    target only if it is not farther from xi (so E never rises), or if the old target misses its
-///    iso-value by more than `iso_tolerance` and the candidate misses it by less (a reset).
-/// 2. **Global step**: Gk = argmin over x of E(x, R, P), the system `(2 L + W + K) x = Σj (wij Ri +
-///    wji Rj)(pi − pj) + W P + K a` (`Lii = ½ Σj (wij + wji)`, `Lij = −½ (wij + wji)`), factored
-///    once per tracker and stiffness in double precision (CHOLMOD when available, else Eigen's
-///    simplicial LLᵀ), 3 right-hand sides, pinned vertices eliminated.
+///    iso-value by more than `iso_tolerance` and the candidate misses it by less (a reset). The
+///    distance compared is the target term's, (xi − Pi)ᵀ Bi (xi − Pi) / Wi; with ε < 1 a plane
+///    that no longer locates the iso-surface near xi (the candidate lies farther beyond it than
+///    `iso_tolerance` / |∇f(xi)|) is also reset.
+/// 2. **Global step**: Gk = argmin over x of E(x, R, P, n), the system `(2 L + B + K) x = Σj (wij
+///    Ri + wji Rj)(pi − pj) + B P + K a` (`Lii = ½ Σj (wij + wji)`, `Lij = −½ (wij + wji)`),
+///    pinned vertices eliminated, in double precision (CHOLMOD when available, else Eigen's
+///    simplicial LLᵀ). With ε = 1 the matrix is the same for the 3 coordinates and factored once
+///    per tracker and stiffness. With ε < 1 it couples them through the normals: conjugate
+///    gradients from xk on the 3 × #unknowns system, preconditioned by a factor of it at earlier
+///    normals, refactored when the iterations exceed 4 (the normals moved). Started from xk, every
+///    conjugate-gradient iterate lowers E, so E never rises however many are taken.
 /// 3. **Convergence** (EnergyTrackerOptions::energy_tolerance) of that plain step; if it holds, or
 ///    at `max_iterations`, the result is Gk. Otherwise x(k+1) is Gk accelerated by Anderson
 ///    (`anderson_window`); if its local step ends with a higher E than xk's, it is replaced by Gk.
@@ -58,6 +71,13 @@ struct EnergySolveOptions {
   /// μ: weight of the target term, Wi = μ Ai / Ā (dimensionless, > 0; default 10; not in the
   /// papers: Projective Skinning's constraint weights are per-element areas likewise).
   float iso_weight{10};
+  /// ε: the fraction of Wi that holds a vertex along its target's tangent plane (dimensionless, in
+  /// (0, 1]; default 0.01, measured in docs/decisions/tracker-one-energy.md; 1: point targets). Below 1 a
+  /// vertex slides along its iso-surface held only by the ARAP term, so tangential distortion relaxes in one
+  /// global step instead of by W / (W + λ) per iteration; the global step then solves one 3 × #unknowns
+  /// system by preconditioned conjugate gradients (see the file comment). Not in the papers: point-to-plane
+  /// targets as in ICP (Chen & Medioni 1992); Projective Dynamics' constraints are point projections.
+  float tangent_weight{0.01f};
   /// Weight of the anchor term at stiffness 1 (before pinning): Ki = ki · anchor_weight · Ai / Ā
   /// (dimensionless, ≥ 0; default 100, so k = 0.1 pulls as hard as the target term; not in the
   /// papers).

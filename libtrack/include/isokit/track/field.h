@@ -44,10 +44,13 @@ struct TrackStats {
   /// the 2014 tracker's lazy evaluation; the final statistics' evaluations are not counted).
   long field_evaluations{0};
   /// CG iterations summed over the relaxation (kConjugateGradient; kGlobal: the preconditioned CG
-  /// iterations of its tangential solves, 0 for a solve by a fresh factorisation)
+  /// iterations of its tangential solves, 0 for a solve by a fresh factorisation; kEnergy with
+  /// plane targets: the preconditioned CG iterations of its global steps)
   long solver_iterations{0};
-  int factorizations{0};  ///< kGlobal: numeric factorisations of the tangential system in the call
-  int backtracks{0};      ///< kGlobal: line-search step halvings in the call
+  /// kGlobal: numeric factorisations of the tangential system in the call; kEnergy: of its global
+  /// step's matrix (the plane system's in each call, the point system's after a stiffness change)
+  int factorizations{0};
+  int backtracks{0};  ///< kGlobal: line-search step halvings in the call
   /// kGlobal: the tangential residual of TrackerOptions::tolerance at the end of the call (the
   /// smaller of the largest move the last solve asked for and the last iteration's largest move;
   /// 0 for the other solvers)
