@@ -84,8 +84,13 @@ void accept_targets(EnergyCall& c, const TargetSet& cand) {
 
 void fit_rotations(EnergyCall& c) {
   const EnergyData& m = c.m;
-  parallel_for(m.n, m.options.grain, [&](std::size_t b, std::size_t e) {
-    for (std::size_t i = b; i < e; ++i) {
+  // A pinned vertex whose neighbours are all pinned keeps its rotation through the call (its
+  // one-ring does not move): fitted at the call's first local step only.
+  const bool all = !c.frozen_rotations_fitted;
+  const std::size_t count = all ? m.n : m.rotating.size();
+  parallel_for(count, m.options.grain, [&](std::size_t b, std::size_t e) {
+    for (std::size_t a = b; a < e; ++a) {
+      const std::size_t i = all ? a : std::size_t(m.rotating[a]);
       Eigen::Matrix3d s = Eigen::Matrix3d::Zero();
       for (int k = m.adj.offsets[i]; k < m.adj.offsets[i + 1]; ++k) {
         const std::size_t j = std::size_t(m.adj.neighbors[std::size_t(k)]);
@@ -95,6 +100,7 @@ void fit_rotations(EnergyCall& c) {
       c.rot[i] = procrustes(s);
     }
   });
+  c.frozen_rotations_fitted = true;
 }
 
 void local_step(EnergyCall& c) {

@@ -130,6 +130,13 @@ void EnergyModel::refactor() {
     }
     energy_scale += iso_w[i] + anchor_w[i] + wsum;
   }
+  rotating.clear();
+  for (std::size_t i = 0; i < n; ++i) {
+    bool moves = !pinned(i);
+    for (int k = adj.offsets[i]; k < adj.offsets[i + 1] && !moves; ++k)
+      moves = !pinned(std::size_t(adj.neighbors[std::size_t(k)]));
+    if (moves) rotating.push_back(static_cast<int>(i));
+  }
   pending_factorizations += system.factor(*this);
 }
 

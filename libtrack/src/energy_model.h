@@ -71,6 +71,7 @@ struct EnergyData {
   std::vector<double> anchor_w;  // Ki (0 for k = 0 and for pinned vertices)
   std::vector<int> unknown;      // per vertex: row in the global system, -1 when pinned
   std::vector<int> moving;       // the unpinned vertices, ascending
+  std::vector<int> rotating;     // the vertices whose one-ring can move (unpinned or next to one)
   int unknowns{0};
   double energy_scale{0};  // Σi (Wi + Ki + Σj wij): E of unit moves (EnergyTrackerOptions::energy_tolerance)
   int pending_factorizations{0};              // since the last call (reported in its TrackStats)
@@ -136,12 +137,14 @@ struct EnergyCall {
   std::vector<std::uint8_t> field_contact, lost;
   int resets{0};                          // targets replaced by the bad-target rule in the last local step
   std::vector<std::uint8_t> reset_count;  // per vertex: resets in this call (energy_local.cpp)
+  bool frozen_rotations_fitted{false};    // the rotations outside EnergyData::rotating are fitted
   TrackStats stats;
 };
 
 /// Local step (energy_local.cpp): field at x, rotations, search, guarded targets.
 void local_step(EnergyCall& c);
-/// Ri = argmin Σj wij ‖(xi − xj) − Ri (pi − pj)‖² (SVD; reflections flipped).
+/// Ri = argmin Σj wij ‖(xi − xj) − Ri (pi − pj)‖² (SVD; reflections flipped), for every vertex at
+/// the call's first local step, then for EnergyData::rotating only.
 void fit_rotations(EnergyCall& c);
 /// The bracketed search along ∇f from each moving vertex (field evaluated at x before).
 void search_targets(EnergyCall& c, TargetSet& out);
