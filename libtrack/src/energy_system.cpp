@@ -1,7 +1,9 @@
 // SPDX-License-Identifier: MIT
-// The energy tracker's global step: the matrix (2 L + W + K) over the unpinned vertices, factored
-// once per stiffness (CHOLMOD when available, else Eigen's simplicial LLᵀ), the right-hand sides
-// of the exact minimiser of E for fixed R and P, and E itself (energy_tracker.h).
+// The energy tracker's global step (energy_tracker.h): with point targets the matrix (2 L + W + K)
+// over the unpinned vertices, factored once per stiffness (CHOLMOD when available, else Eigen's
+// simplicial LLᵀ); with plane targets the coupled (2 L + B + K) over their 3 coordinates, solved by
+// conjugate gradients preconditioned by a factor of it taken in each call; the right-hand sides of
+// the minimiser of E for fixed R, P and n, and E itself.
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -88,7 +90,8 @@ void EnergySystem::Impl::build_planes(const EnergyData& m) {
   if (n > 0) plane_factor.analyzePattern(planes);
 }
 
-// The diagonal blocks Σj (wij + wji) I + Ki I + Wi (ε I + (1 − ε) ni niᵀ) at the given normals.
+// The diagonal blocks Σj (wij + wji) I + Ki I + Wi (ε I + (1 − ε) ni niᵀ) at the given normals (a
+// zero normal is a point target: Wi I).
 void EnergySystem::Impl::set_plane_blocks(const EnergyData& m, const std::vector<Vec3d>& normals) {
   const double eps = double(m.options.tangent_weight);
   double* v = planes.valuePtr();
