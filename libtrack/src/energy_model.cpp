@@ -51,7 +51,7 @@ void validate_energy_options(const EnergyTrackerOptions& o) {
           "must be finite and > 0 (got " + format_number(o.iso_weight) + ")", fix + ": 10");
   require(std::isfinite(o.tangent_weight) && o.tangent_weight > 0 && o.tangent_weight <= 1,
           "EnergyTrackerOptions::tangent_weight",
-          "must be in (0, 1] (got " + format_number(o.tangent_weight) + ")", fix + ": 1");
+          "must be in (0, 1] (got " + format_number(o.tangent_weight) + ")", fix + ": 0.01");
   require(in_range(o.anchor_weight, 0, 1e30f), "EnergyTrackerOptions::anchor_weight",
           "must be finite and >= 0 (got " + format_number(o.anchor_weight) + ")", fix + ": 100");
   require(std::isfinite(o.max_cotangent) && o.max_cotangent > 0, "EnergyTrackerOptions::max_cotangent",

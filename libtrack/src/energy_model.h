@@ -83,10 +83,12 @@ struct EnergyData {
   bool pinned(std::size_t i) const { return unknown[i] < 0; }
   /// Plane targets (EnergySolveOptions::tangent_weight < 1).
   bool planes() const { return options.tangent_weight < 1.f; }
+  /// A target without a normal is a point target: Bi = Wi I whatever tangent_weight is.
+  static bool point_target(const Vec3d& normal) { return normal.x == 0 && normal.y == 0 && normal.z == 0; }
   /// (xi − p)ᵀ Bi (xi − p) / Wi for a target p with normal `normal` (energy_tracker.h).
   double target_distance2(const Vec3d& xi, const Vec3d& p, const Vec3d& normal) const {
     const Vec3d d = xi - p;
-    if (normal.x == 0 && normal.y == 0 && normal.z == 0) return squared_norm(d);  // a point target
+    if (point_target(normal)) return squared_norm(d);
     const double eps = double(options.tangent_weight), dn = dot(normal, d);
     return eps * squared_norm(d) + (1.0 - eps) * dn * dn;
   }
@@ -119,7 +121,8 @@ enum class TargetKind : std::uint8_t { kNone, kIso, kContact, kLost };
 /// their kinds; also the candidates of one local step.
 struct TargetSet {
   std::vector<Vec3d> point;
-  std::vector<Vec3d> normal;  // unit ∇f/|∇f| at the vertex when the target was found; 0 if none
+  std::vector<Vec3d> normal;  // unit normal of the target's plane (∇f/|∇f| at the vertex when it was
+                              // found, or the contact surface's at a crease); 0: a point target
   std::vector<float> res;
   std::vector<TargetKind> kind;
 };

@@ -99,7 +99,7 @@ void EnergySystem::Impl::set_plane_blocks(const EnergyData& m, const std::vector
     for (std::size_t u = b; u < e; ++u) {
       const std::size_t i = std::size_t(m.moving[u]);
       const double w = m.iso_w[i], nv[3] = {normals[i].x, normals[i].y, normals[i].z};
-      const bool point = nv[0] == 0 && nv[1] == 0 && nv[2] == 0;  // Bi = Wi I
+      const bool point = EnergyData::point_target(normals[i]);  // Bi = Wi I
       for (int r = 0; r < 3; ++r)
         for (int c = 0; c < 3; ++c)
           v[block[u][std::size_t(3 * r + c)]] =
@@ -214,7 +214,7 @@ Vec3d target_pull(const EnergyCall& c, std::size_t i) {
   const Vec3d& p = c.targets.point[i];
   if (!m.planes()) return p * m.iso_w[i];
   const Vec3d& n = c.targets.normal[i];
-  if (n.x == 0 && n.y == 0 && n.z == 0) return p * m.iso_w[i];  // a point target
+  if (EnergyData::point_target(n)) return p * m.iso_w[i];
   const double eps = double(m.options.tangent_weight);
   return (p * eps + n * ((1.0 - eps) * dot(n, p))) * m.iso_w[i];
 }
@@ -272,9 +272,8 @@ double energy(const EnergyCall& c, const std::vector<Vec3d>& x) {
         const std::size_t j = std::size_t(m.adj.neighbors[std::size_t(k)]);
         s += m.w[std::size_t(k)] * squared_norm((x[i] - x[j]) - mul(c.rot[i], m.rest[i] - m.rest[j]));
       }
-      const double d2 = m.planes() ? m.target_distance2(x[i], c.targets.point[i], c.targets.normal[i])
-                                   : squared_norm(x[i] - c.targets.point[i]);
-      s += m.iso_w[i] * d2 + m.anchor_w[i] * squared_norm(x[i] - c.anchor[i]);
+      s += m.iso_w[i] * m.target_distance2(x[i], c.targets.point[i], c.targets.normal[i]) +
+           m.anchor_w[i] * squared_norm(x[i] - c.anchor[i]);
       per[i] = s;
     }
   });
