@@ -5,12 +5,11 @@
 #include <cmath>
 
 #include <Eigen/Core>
-#include <Eigen/LU>
-#include <Eigen/SVD>
 
 #include "energy_model.h"
 #include "field_eval.h"
 #include "isokit/core/parallel.h"
+#include "isokit/core/rotation_fit.h"
 
 namespace isokit::track::detail {
 
@@ -19,16 +18,7 @@ namespace {
 // Resets per vertex and call (see `replaces`).
 constexpr std::uint8_t kMaxResets = 2;
 
-// Rotation minimising Σj wij ‖ej − R dj‖² for S = Σj wij dj ejᵀ: R = V Uᵀ (S = U Σ Vᵀ), with the
-// sign of the singular vector of the smallest singular value flipped if that is a reflection.
-Mat3d procrustes(const Eigen::Matrix3d& s) {
-  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(s, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  Eigen::Matrix3d u = svd.matrixU();
-  Eigen::Matrix3d r = svd.matrixV() * u.transpose();
-  if (r.determinant() < 0) {
-    u.col(2) = -u.col(2);  // JacobiSVD sorts the singular values in decreasing order
-    r = svd.matrixV() * u.transpose();
-  }
+Mat3d to_mat3(const Eigen::Matrix3d& r) {
   Mat3d out;
   for (int a = 0; a < 3; ++a)
     for (int b = 0; b < 3; ++b) out(a, b) = r(a, b);
@@ -91,13 +81,13 @@ void fit_rotations(EnergyCall& c) {
   parallel_for(count, m.options.grain, [&](std::size_t b, std::size_t e) {
     for (std::size_t a = b; a < e; ++a) {
       const std::size_t i = all ? a : std::size_t(m.rotating[a]);
-      Eigen::Matrix3d s = Eigen::Matrix3d::Zero();
+      Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();  // Σj wij (xi − xj)(pi − pj)ᵀ
       for (int k = m.adj.offsets[i]; k < m.adj.offsets[i + 1]; ++k) {
         const std::size_t j = std::size_t(m.adj.neighbors[std::size_t(k)]);
         const Vec3d d = m.rest[i] - m.rest[j], x = c.x[i] - c.x[j];
-        s += m.w[std::size_t(k)] * Eigen::Vector3d(d.x, d.y, d.z) * Eigen::RowVector3d(x.x, x.y, x.z);
+        cov += m.w[std::size_t(k)] * Eigen::Vector3d(x.x, x.y, x.z) * Eigen::RowVector3d(d.x, d.y, d.z);
       }
-      c.rot[i] = procrustes(s);
+      c.rot[i] = to_mat3(procrustes_rotation(cov));
     }
   });
   c.frozen_rotations_fitted = true;

@@ -20,8 +20,8 @@ using Mat3d = Mat3T<double>;
 struct EnergyData;
 
 /// The global step's matrix `(2 L + W + K)` over the unpinned vertices and its sparse Cholesky
-/// factor (double precision; energy_system.cpp); with plane targets (tangent_weight < 1) also the
-/// coupled `(2 L + B + K)` over their 3 coordinates and a factor of it at earlier normals.
+/// factor (double precision; energy_system.cpp); with plane targets (tangent_weight < 1) the step
+/// solves `(2 L + B + K)` over their 3 coordinates by conjugate gradients preconditioned by it.
 class EnergySystem {
  public:
   EnergySystem();
@@ -29,23 +29,18 @@ class EnergySystem {
   EnergySystem(const EnergySystem&) = delete;
   EnergySystem& operator=(const EnergySystem&) = delete;
 
-  /// Assembles and factors the matrix of `m` (its weights, Wi, Ki and unknowns); with plane
-  /// targets assembles the plane system's pattern instead (factored by solve_planes). Returns
-  /// whether it factored. \throw InputError if the factorisation fails (not positive definite).
+  /// Assembles and factors the matrix of `m` (its weights, Wi, Ki and unknowns). Returns whether it
+  /// factored (not without unknowns). \throw InputError if the factorisation fails (not positive
+  /// definite).
   bool factor(const EnergyData& m);
-  /// Marks the plane factor stale: the next solve_planes refactors.
-  void begin_call() const;
   /// Solves `(2 L + W + K) x = rhs` for the 3 coordinates: `rhs` is `unknowns by 3` (row-major),
   /// overwritten by the solution.
   void solve(double* rhs, int unknowns) const;
   /// Plane targets: solves `(2 L + B + K) x = rhs` (`rhs` and `x`: 3 · unknowns, interleaved per
-  /// unknown) by conjugate gradients from the `x` given, preconditioned by the last factor of
-  /// this matrix; refactors it first when the last solve took more than kRefactorAfter
-  /// iterations, or when there is none. `normals` per vertex. Returns the iterations taken.
+  /// unknown) by conjugate gradients from the `x` given, preconditioned by the factor of
+  /// `(2 L + W + K)` per coordinate. `normals` per vertex. Returns the iterations taken.
   int solve_planes(const EnergyData& m, const std::vector<Vec3d>& normals, const std::vector<double>& rhs,
                    std::vector<double>& x) const;
-  /// Factorisations of the plane system since the last call to this (reported with the others).
-  int take_plane_factorizations() const;
 
  private:
   struct Impl;
@@ -146,8 +141,9 @@ struct EnergyCall {
 
 /// Local step (energy_local.cpp): field at x, rotations, search, guarded targets.
 void local_step(EnergyCall& c);
-/// Ri = argmin Σj wij ‖(xi − xj) − Ri (pi − pj)‖² (SVD; reflections flipped), for every vertex at
-/// the call's first local step, then for EnergyData::rotating only.
+/// Ri = argmin Σj wij ‖(xi − xj) − Ri (pi − pj)‖² over rotations (the SVD, reflections flipped;
+/// isokit/core/rotation_fit.h), for every vertex at the call's first local step, then for
+/// EnergyData::rotating only.
 void fit_rotations(EnergyCall& c);
 /// The bracketed search along ∇f from each moving vertex (field evaluated at x before).
 void search_targets(EnergyCall& c, TargetSet& out);

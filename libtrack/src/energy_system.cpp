@@ -1,11 +1,10 @@
 // SPDX-License-Identifier: MIT
-// The energy tracker's global step (energy_tracker.h): with point targets the matrix (2 L + W + K)
-// over the unpinned vertices, factored once per stiffness (CHOLMOD when available, else Eigen's
-// simplicial LLᵀ); with plane targets the coupled (2 L + B + K) over their 3 coordinates, solved by
-// conjugate gradients preconditioned by a factor of it taken in each call; the right-hand sides of
-// the minimiser of E for fixed R, P and n, and E itself.
+// The energy tracker's global step (energy_tracker.h): the matrix (2 L + W + K) over the unpinned
+// vertices, factored once per stiffness (CHOLMOD when available, else Eigen's simplicial LLᵀ);
+// with point targets its solve is the step, with plane targets (2 L + B + K) couples the 3
+// coordinates and is solved by conjugate gradients preconditioned by that same factor; the
+// right-hand sides of the minimiser of E for fixed R, P and n, and E itself.
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <string>
 
@@ -24,10 +23,6 @@ Vec3d mul(const Mat3d& r, const Vec3d& v) {
 
 }  // namespace
 
-// Conjugate-gradient iterations of a plane solve beyond which the next solve refactors: the
-// normals have moved since the factor. Each call also refactors at its first global step, so a
-// call's result depends on its inputs only.
-constexpr int kRefactorAfter = 4;
 // A plane solve stops when the residual fell to kPlaneStepTolerance of the step's own (the
 // residual at xk), or to kPlaneTolerance of ‖b‖, or at the cap; the iterate is used whichever
 // ends it, as every one lowers E. The step's error is then a small fraction of the step, so the
@@ -38,99 +33,76 @@ constexpr double kPlaneTolerance = 1e-10;
 constexpr int kPlaneMaxIterations = 100;
 
 struct EnergySystem::Impl {
-  SpMat a;
+  SpMat a;  // 2 L + W + K
   Factor factor;
-  // Plane targets: the 3n × 3n matrix (full storage, interleaved per unknown), the positions of
-  // each unknown's 3 × 3 diagonal block in its value array, the constant part of those blocks
-  // (Σj (wij + wji) + Ki on the diagonal), and a factor of it at earlier normals.
-  SpMat planes;
-  std::vector<std::array<int, 9>> block;
-  std::vector<double> block_base;
-  Factor plane_factor;
-  bool plane_factored{false};
-  int last_iterations{0};
-  int plane_factorizations{0};
 
-  void build_planes(const EnergyData& m);
-  void set_plane_blocks(const EnergyData& m, const std::vector<Vec3d>& normals);
-  int conjugate_gradients(const std::vector<double>& rhs, std::vector<double>& x);
+  int conjugate_gradients(const EnergyData& m, const std::vector<Vec3d>& normals,
+                          const std::vector<double>& rhs, std::vector<double>& x) const;
+  void multiply(const EnergyData& m, const std::vector<Vec3d>& normals, Eigen::Ref<const Eigen::VectorXd> p,
+                Eigen::Ref<Eigen::VectorXd> out) const;
+  Eigen::VectorXd precondition(const Eigen::VectorXd& r) const;
 };
 
-// The plane system's pattern from the point system's (each entry of `a` becomes a 3 × 3 block:
-// −(wij + wji) I off the diagonal, a full block on it) and the positions of the diagonal blocks.
-void EnergySystem::Impl::build_planes(const EnergyData& m) {
-  const int n = m.unknowns;
-  std::vector<Eigen::Triplet<double, int>> trips;
-  trips.reserve(std::size_t(a.nonZeros()) * 3 + std::size_t(n) * 6);
-  block_base.assign(std::size_t(n), 0.0);
-  for (int col = 0; col < n; ++col)
-    for (SpMat::InnerIterator it(a, col); it; ++it) {
-      const int row = int(it.row());
-      if (row == col) {
-        block_base[std::size_t(row)] = it.value() - m.iso_w[std::size_t(m.moving[std::size_t(row)])];
-        for (int r = 0; r < 3; ++r)
-          for (int c = 0; c < 3; ++c) trips.emplace_back(3 * row + r, 3 * col + c, 0.0);
-      } else {
-        for (int k = 0; k < 3; ++k) trips.emplace_back(3 * row + k, 3 * col + k, it.value());
-      }
-    }
-  planes.resize(3 * n, 3 * n);
-  planes.setFromTriplets(trips.begin(), trips.end());
-  planes.makeCompressed();
-  block.assign(std::size_t(n), {});
-  for (int u = 0; u < n; ++u)
-    for (int c = 0; c < 3; ++c)
-      for (SpMat::InnerIterator it(planes, 3 * u + c); it; ++it) {
-        const int r = int(it.row()) - 3 * u;
-        if (r >= 0 && r < 3)
-          block[std::size_t(u)][std::size_t(3 * r + c)] = int(&it.value() - planes.valuePtr());
-      }
-  plane_factored = false;
-  last_iterations = 0;
-  if (n > 0) plane_factor.analyzePattern(planes);
+using Rows = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;  // 3 coordinates per unknown
+
+// The preconditioner (2 L + W + K)⁻¹ per coordinate: it holds every target at full weight in
+// every direction, so it bounds the plane matrix from above, (2 L + εW + K) ≤ (2 L + B + K) ≤
+// (2 L + W + K), and it is the same matrix at every normal: factored once per stiffness instead
+// of at each call (measured in docs/decisions/tracker-one-energy.md, "A constant preconditioner").
+Eigen::VectorXd EnergySystem::Impl::precondition(const Eigen::VectorXd& r) const {
+  const Eigen::Index n = r.size() / 3;
+  const Eigen::MatrixXd z = factor.solve(Eigen::MatrixXd(Eigen::Map<const Rows>(r.data(), n, 3)));
+  Eigen::VectorXd out(r.size());
+  Eigen::Map<Rows>(out.data(), n, 3) = z;
+  return out;
 }
 
-// The diagonal blocks Σj (wij + wji) I + Ki I + Wi (ε I + (1 − ε) ni niᵀ) at the given normals (a
-// zero normal is a point target: Wi I).
-void EnergySystem::Impl::set_plane_blocks(const EnergyData& m, const std::vector<Vec3d>& normals) {
+// out = (2 L + B + K) p = (2 L + W + K) p − Σi Wi (1 − ε) (I − ni niᵀ) pi, row by row (`a` is
+// symmetric: column u holds row u).
+void EnergySystem::Impl::multiply(const EnergyData& m, const std::vector<Vec3d>& normals,
+                                  Eigen::Ref<const Eigen::VectorXd> p,
+                                  Eigen::Ref<Eigen::VectorXd> out) const {
   const double eps = double(m.options.tangent_weight);
-  double* v = planes.valuePtr();
   parallel_for(m.moving.size(), m.options.grain, [&](std::size_t b, std::size_t e) {
     for (std::size_t u = b; u < e; ++u) {
+      Vec3d sum{};
+      for (SpMat::InnerIterator it(a, Eigen::Index(u)); it; ++it) {
+        const std::size_t j = 3 * std::size_t(it.row());
+        sum += Vec3d{p[j], p[j + 1], p[j + 2]} * it.value();
+      }
       const std::size_t i = std::size_t(m.moving[u]);
-      const double w = m.iso_w[i], nv[3] = {normals[i].x, normals[i].y, normals[i].z};
-      const bool point = EnergyData::point_target(normals[i]);  // Bi = Wi I
-      for (int r = 0; r < 3; ++r)
-        for (int c = 0; c < 3; ++c)
-          v[block[u][std::size_t(3 * r + c)]] =
-              point ? (r == c ? block_base[u] + w : 0.0)
-                    : (r == c ? block_base[u] + w * eps : 0.0) + w * (1.0 - eps) * nv[r] * nv[c];
+      if (!EnergyData::point_target(normals[i])) {
+        const Vec3d pu{p[3 * u], p[3 * u + 1], p[3 * u + 2]};
+        sum = sum - (pu - normals[i] * dot(normals[i], pu)) * (m.iso_w[i] * (1.0 - eps));
+      }
+      out[3 * u] = sum.x, out[3 * u + 1] = sum.y, out[3 * u + 2] = sum.z;
     }
   });
 }
 
-// Preconditioned conjugate gradients on `planes` from x (Saad, Iterative Methods, alg. 9.1); the
-// preconditioner is the factor. Returns the iterations.
-int EnergySystem::Impl::conjugate_gradients(const std::vector<double>& rhs, std::vector<double>& xv) {
+int EnergySystem::Impl::conjugate_gradients(const EnergyData& m, const std::vector<Vec3d>& normals,
+                                            const std::vector<double>& rhs, std::vector<double>& xv) const {
   using Vec = Eigen::VectorXd;
   const Eigen::Map<const Vec> b(rhs.data(), Eigen::Index(rhs.size()));
   Eigen::Map<Vec> x(xv.data(), Eigen::Index(xv.size()));
-  Vec r = b - planes * x;
+  Vec r(b.size()), ap(x.size());
+  multiply(m, normals, x, r);
+  r = b - r;
   const double stop = std::max(kPlaneStepTolerance * r.norm(), kPlaneTolerance * b.norm());
   if (r.norm() <= kPlaneTolerance * b.norm()) return 0;
-  Vec z = plane_factor.solve(r), p = z, ap(x.size());
+  Vec z = precondition(r), p = z;
   double rz = r.dot(z);
   int k = 0;
   while (k < kPlaneMaxIterations) {
     ++k;
-    ap.noalias() = planes * p;
+    multiply(m, normals, p, ap);
     const double pap = p.dot(ap);
     if (!(pap > 0)) break;
     const double alpha = rz / pap;
     x += alpha * p;
     r -= alpha * ap;
     if (r.norm() <= stop) break;
-    z = plane_factor.solve(r);
+    z = precondition(r);
     const double rz_next = r.dot(z);
     p = z + (rz_next / rz) * p;
     rz = rz_next;
@@ -160,10 +132,6 @@ bool EnergySystem::factor(const EnergyData& m) {
   impl_->a.resize(m.unknowns, m.unknowns);
   impl_->a.setFromTriplets(trips.begin(), trips.end());
   impl_->a.makeCompressed();
-  if (m.planes()) {  // the plane system is factored in each call (solve_planes)
-    impl_->build_planes(m);
-    return false;
-  }
   if (m.unknowns == 0) return false;
   impl_->factor.compute(impl_->a);
   require(impl_->factor.info() == Eigen::Success, "energy tracker matrix",
@@ -174,36 +142,15 @@ bool EnergySystem::factor(const EnergyData& m) {
 
 void EnergySystem::solve(double* rhs, int unknowns) const {
   if (unknowns == 0) return;
-  Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>> b(rhs, unknowns, 3);
+  Eigen::Map<Rows> b(rhs, unknowns, 3);
   const Eigen::MatrixXd x = impl_->factor.solve(Eigen::MatrixXd(b));
   b = x;
 }
 
 int EnergySystem::solve_planes(const EnergyData& m, const std::vector<Vec3d>& normals,
                                const std::vector<double>& rhs, std::vector<double>& x) const {
-  Impl& im = *impl_;
   if (m.unknowns == 0) return 0;
-  im.set_plane_blocks(m, normals);
-  if (!im.plane_factored || im.last_iterations > kRefactorAfter) {
-    im.plane_factor.factorize(im.planes);
-    require(im.plane_factor.info() == Eigen::Success, "energy tracker plane system",
-            "could not be factorised (" + std::to_string(3 * m.unknowns) + " unknowns)",
-            "check the rest mesh for non-finite or huge coordinates and the weights for overflow");
-    im.plane_factored = true;
-    ++im.plane_factorizations;
-  }
-  im.last_iterations = im.conjugate_gradients(rhs, x);
-  return im.last_iterations;
-}
-
-void EnergySystem::begin_call() const {
-  impl_->plane_factored = false;
-}
-
-int EnergySystem::take_plane_factorizations() const {
-  const int k = impl_->plane_factorizations;
-  impl_->plane_factorizations = 0;
-  return k;
+  return impl_->conjugate_gradients(m, normals, rhs, x);
 }
 
 namespace {

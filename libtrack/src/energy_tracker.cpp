@@ -46,7 +46,6 @@ void start_call(EnergyCall& c, const Positions& positions, const Positions& anch
   c.field_contact.assign(m.n, 0);
   c.lost.assign(m.n, 0);
   c.reset_count.assign(m.n, 0);
-  c.m.system.begin_call();
 }
 
 std::vector<double> pack(const EnergyData& m, const std::vector<Vec3d>& x) {
@@ -166,7 +165,7 @@ void finish_call(EnergyCall& c, EnergyData& m, Positions& positions) {
   }
   s.mean_residual = count > 0 ? float(sum / count) : 0.f;
   s.vertex_updates = long(m.n) * s.iterations;
-  s.factorizations = m.pending_factorizations + c.m.system.take_plane_factorizations();
+  s.factorizations = m.pending_factorizations;
   m.pending_factorizations = 0;
 }
 

@@ -9,9 +9,9 @@
 #include <cmath>
 #include <functional>
 
-#include "animation/rotation_fit.h"
 #include "isokit/core/error.h"
 #include "isokit/core/parallel.h"
+#include "isokit/core/rotation_fit.h"
 #include "isokit/skinning/deform.h"
 
 namespace isokit::skinning {

@@ -36,9 +36,9 @@
 ///    pinned vertices eliminated, in double precision (CHOLMOD when available, else Eigen's
 ///    simplicial LLᵀ). With ε = 1 the matrix is the same for the 3 coordinates and factored once
 ///    per tracker and stiffness. With ε < 1 it couples them through the normals: conjugate
-///    gradients from xk on the 3 × #unknowns system, preconditioned by a factor of it at earlier
-///    normals, refactored when the iterations exceed 4 (the normals moved). Started from xk, every
-///    conjugate-gradient iterate lowers E, so E never rises however many are taken.
+///    gradients from xk on the 3 × #unknowns system, preconditioned per coordinate by the factor of
+///    `2 L + W + K` (the same for every normal: factored once per tracker and stiffness). Started from xk,
+///    every conjugate-gradient iterate lowers E, so E never rises however many are taken.
 /// 3. **Convergence** (EnergyTrackerOptions::energy_tolerance) of that plain step; if it holds, or
 ///    at `max_iterations`, the result is Gk. Otherwise x(k+1) is Gk accelerated by Anderson
 ///    (`anderson_window`); if its local step ends with a higher E than xk's, it is replaced by Gk.

@@ -48,7 +48,7 @@ struct TrackStats {
   /// plane targets: the preconditioned CG iterations of its global steps)
   long solver_iterations{0};
   /// kGlobal: numeric factorisations of the tangential system in the call; kEnergy: of its global
-  /// step's matrix (the plane system's in each call, the point system's after a stiffness change)
+  /// step's matrix `2 L + W + K`, taken at construction and after a stiffness change, never in a call
   int factorizations{0};
   int backtracks{0};  ///< kGlobal: line-search step halvings in the call
   /// kGlobal: the tangential residual of TrackerOptions::tolerance at the end of the call (the
