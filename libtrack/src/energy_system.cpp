@@ -41,6 +41,8 @@ struct EnergySystem::Impl {
   void multiply(const EnergyData& m, const std::vector<Vec3d>& normals, Eigen::Ref<const Eigen::VectorXd> p,
                 Eigen::Ref<Eigen::VectorXd> out) const;
   Eigen::VectorXd precondition(const Eigen::VectorXd& r) const;
+  // (2 L + W + K) x = rhs for the 3 coordinates, `rhs` unknowns × 3 row-major, overwritten.
+  void solve_rows(double* rhs, Eigen::Index unknowns) const;
 };
 
 using Rows = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;  // 3 coordinates per unknown
@@ -50,11 +52,15 @@ using Rows = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;  // 3 co
 // (2 L + W + K), and it is the same matrix at every normal: factored once per stiffness instead
 // of at each call (measured in docs/decisions/tracker-one-energy.md, "A constant preconditioner").
 Eigen::VectorXd EnergySystem::Impl::precondition(const Eigen::VectorXd& r) const {
-  const Eigen::Index n = r.size() / 3;
-  const Eigen::MatrixXd z = factor.solve(Eigen::MatrixXd(Eigen::Map<const Rows>(r.data(), n, 3)));
-  Eigen::VectorXd out(r.size());
-  Eigen::Map<Rows>(out.data(), n, 3) = z;
+  Eigen::VectorXd out = r;
+  solve_rows(out.data(), Eigen::Index(r.size() / 3));
   return out;
+}
+
+void EnergySystem::Impl::solve_rows(double* rhs, Eigen::Index unknowns) const {
+  Eigen::Map<Rows> b(rhs, unknowns, 3);
+  const Eigen::MatrixXd x = factor.solve(Eigen::MatrixXd(b));
+  b = x;
 }
 
 // out = (2 L + B + K) p = (2 L + W + K) p − Σi Wi (1 − ε) (I − ni niᵀ) pi, row by row (`a` is
@@ -142,9 +148,7 @@ bool EnergySystem::factor(const EnergyData& m) {
 
 void EnergySystem::solve(double* rhs, int unknowns) const {
   if (unknowns == 0) return;
-  Eigen::Map<Rows> b(rhs, unknowns, 3);
-  const Eigen::MatrixXd x = impl_->factor.solve(Eigen::MatrixXd(b));
-  b = x;
+  impl_->solve_rows(rhs, unknowns);
 }
 
 int EnergySystem::solve_planes(const EnergyData& m, const std::vector<Vec3d>& normals,

@@ -1,22 +1,17 @@
 // SPDX-License-Identifier: MIT
 #include "isokit/skinning/deform.h"
 
-#include <Eigen/SVD>
 #include <cmath>
 
 #include "isokit/core/error.h"
 #include "isokit/core/parallel.h"
+#include "isokit/core/rotation_fit.h"
 
 namespace isokit::skinning {
 
 Affine rigid_part(const Affine& a) {
-  const Eigen::Matrix3d m = a.linear();
-  Eigen::JacobiSVD<Eigen::Matrix3d> svd(m, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  Eigen::Matrix3d u = svd.matrixU();
-  const Eigen::Matrix3d v = svd.matrixV();
-  if ((u * v.transpose()).determinant() < 0) u.col(2) = -u.col(2);
   Affine r = Affine::Identity();
-  r.linear() = u * v.transpose();
+  r.linear() = procrustes_rotation(a.linear());
   r.translation() = a.translation();
   return r;
 }
